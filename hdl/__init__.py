@@ -1,0 +1,1 @@
+"""Synthesisable Amaranth RTL of the shading units, one folder per unit."""

@@ -1,0 +1,93 @@
+"""Bump vector dotted with an interpolated light, weighted: seed 004 eq 1, ``(1-h) + h*(N.L)``.
+
+Formats (all exact integers, the unit in the field names the scale):
+
+- bump ``x z`` s9, ``y`` u8: the decoded texel, ``|x| + |y| + |z| = 255`` (texel_decode);
+- light ``lx ly lz`` s8: a unit vector times 127, linearly interpolated upstream, so its
+  length may fall below 127 (the patent accepts that loss);
+- ``h`` u8: the weight h times 255 (255 is exactly 1);
+- out ``x`` u10: ``(1-h) + h*d`` as a 10-bit fraction (value/1024, saturated to 0..1023), the
+  ``X`` that fenney_power takes.
+
+The dot product ``d`` is, with ``D = x*lx + y*ly + z*lz``:
+
+- ``normalize=False`` (the patent's): ``d = D / (255*127)``. The bump vector has L1 length 1, so
+  its Euclidean length lies between 1/sqrt(3) and 1 and diagonal normals shade darker.
+- ``normalize=True``: ``d = D / (127 * max(|b|, 128))``, the bump vector renormalised by a
+  reciprocal-square-root table addressed by ``n2 = |b|^2`` (``rsqrt_bits`` address bits over
+  0..65535; n2 >= 65536, from invalid texels only, is shifted down two bits and the result
+  scaled by 1/2, which is exact). Vectors shorter than 128/255, which texel_decode never
+  produces, are renormalised as if 128/255 long.
+
+Fixed point: ``d`` is carried as ``dq = round(D * g / 2**15)``, ``d * 2**14``, with ``g`` the
+table entry ``2**29 / (127 * |b|)``. Then ``M = (255 - h) * 2**14 + h * dq`` and
+``out = round(M * 1024 / (255 * 2**14)) = round(M / 4080)``, done as ``M * K >> 36``. The bound
+these roundings give against the float model is derived in ``golden.fenney.dot_bound``.
+"""
+import numpy as np
+from amaranth.hdl import Mux
+
+from ..fixed import Field, s, u
+from ..lut import build_lut, rom
+from ..unit import Unit, check_bool, check_int
+
+G_FRAC = 29                  # g = 2**29 / (127 * |b|)
+D_FRAC = 14                  # dq = d * 2**14
+DIV_SHIFT = 36               # M / 4080 as M * K >> 36
+DIV_K = round(2**DIV_SHIFT / 4080)
+MIN_LEN = 128                # shortest |b| (of 255) the table renormalises exactly
+G_PLAIN = round(2**G_FRAC / (127 * 255))
+
+
+def rsqrt_lut(addr_bits):
+    """g(n2) = 2**29 / (127 * sqrt(max(n2, 128**2))) over n2 in [0, 65536)."""
+    return build_lut(lambda n2: 2.0**G_FRAC / (127 * np.sqrt(np.maximum(n2, MIN_LEN**2))),
+                     addr_bits, u(16), domain=(0, 65536))
+
+
+class FenneyDot(Unit):
+    """(1-h) + h * (bump . light), one result per clock; latency 4, or 5 when renormalising."""
+    NAME = "fenney_dot"
+    DOC = "Fenney bump . light dot product, weighted by h (US 6,819,319 eq 1)"
+    PARAMS = {"normalize": False, "rsqrt_bits": 12}
+    inputs = (Field("x", s(9, unit="1/255")), Field("y", u(8, unit="1/255")),
+              Field("z", s(9, unit="1/255")),
+              Field("lx", s(8, unit="1/127")), Field("ly", s(8, unit="1/127")),
+              Field("lz", s(8, unit="1/127")), Field("h", u(8, unit="1/255")))
+    outputs = (Field("x", u(10, 10)),)
+
+    def validate(self, normalize, rsqrt_bits):
+        check_bool("normalize", normalize)
+        check_int("rsqrt_bits", rsqrt_bits, 4, 16)
+
+    @property
+    def latency(self):
+        return 5 if self.params["normalize"] else 4
+
+    @property
+    def lut(self):
+        return rsqrt_lut(self.params["rsqrt_bits"]) if self.params["normalize"] else None
+
+    def datapath(self, p, v):
+        v = dict(v)
+        x, y, z = v.pop("x"), v.pop("y"), v.pop("z")
+        lx, ly, lz = v.pop("lx"), v.pop("ly"), v.pop("lz")
+        v["dot"] = x * lx + y * ly + z * lz                           # D
+        if self.params["normalize"]:
+            v = p.stage({**v, "n2": x * x + y * y + z * z})
+            n2 = v.pop("n2")
+            big = n2 >= 65536
+            n2_16 = Mux(big, n2 >> 2, n2)[:16]
+            addr = n2_16 >> (16 - self.params["rsqrt_bits"])
+            v = p.stage({**v, "g": rom(p.m, self.lut, addr, "rsqrt"), "big": big})
+            g, big = v.pop("g"), v.pop("big")
+            prod = v.pop("dot") * g
+            dq = Mux(big, (prod + (1 << 15)) >> 16, (prod + (1 << 14)) >> 15)
+        else:
+            v = p.stage(v)
+            dq = (v.pop("dot") * G_PLAIN + (1 << 14)) >> 15
+        v = p.stage({**v, "dq": dq})                                   # d * 2**14
+        h = v.pop("h")
+        v = p.stage({**v, "m": ((255 - h) << D_FRAC) + h * v.pop("dq")})
+        q = (v.pop("m") * DIV_K + (1 << (DIV_SHIFT - 1))) >> DIV_SHIFT
+        return p.stage({**v, "x": Mux(q < 0, 0, Mux(q > 1023, 1023, q))[:10]})

@@ -1,0 +1,76 @@
+"""Fenney's first embodiment, FIG. 3: polar bump texels shaded with k1, k2, k3 and Q.
+
+    intensity = clamp(k1 + k2 sin S + k3 cos S cos(R - Q), 0, 255)        (eq 3)
+    shade     = fenney_power(intensity expanded to 10 bits, c)
+
+Formats: ``s`` u8 is S/90 deg * 256 (the texel's bits 15:8), ``r`` and ``q`` u8 are R and Q in
+turns * 256 (bits 7:0 for r); ``k1 k2 k3`` u8 are k * 255; ``c`` u8 the concentration.
+The 8-bit intensity is widened to the power unit's 10-bit X by bit replication
+(``i << 2 | i >> 6``), so 0 -> 0 and 255 -> 1023.
+
+Datapath of FIG. 3: a sin/cos unit on S and one on R - Q (wrapping mod 256), the latter giving
+a magnitude and a sign bit, all three from one quarter-wave cosine table of ``trig_bits``
+fraction bits; multipliers 12 and 14 (k2 sin S, k3 cos S), multiplier 20 (by |cos(R-Q)|),
+adder 22 (k1 + k2 sin S), add/subtract unit 24 steered by the sign, a signed 11-bit sum, a
+clamp to 0..255, and the power unit 30.
+
+Each table entry is within ``e`` (<= 0.5) LSB of 2**-trig_bits, so the sum before rounding is
+within ``255 * (3e + e**2 * 2**-trig_bits) * 2**-trig_bits`` of the real one, plus 0.5 for the
+rounding: 0.874 LSB of intensity at trig_bits = 10 (golden.fenney.polar_bound).
+"""
+from amaranth.hdl import Mux
+
+from ..fixed import Field, u
+from ..lut import quarter_cos_lut, rom
+from ..unit import Unit, check_int
+from .fenney_power import FenneyPower
+
+
+class FenneyPolar(Unit):
+    """S/R texel and k1, k2, k3, Q, c to intensity and shade, one per clock."""
+    NAME = "fenney_polar"
+    DOC = "Fenney polar S/R bump shading, FIG. 3 (US 6,819,319, first embodiment)"
+    PARAMS = {"trig_bits": 10}
+    inputs = (Field("s", u(8, 8, "90deg")), Field("r", u(8, 8, "turn")),
+              Field("k1", u(8, unit="1/255")), Field("k2", u(8, unit="1/255")),
+              Field("k3", u(8, unit="1/255")), Field("q", u(8, 8, "turn")),
+              Field("c", u(8, 8)))
+    outputs = (Field("intensity", u(8, unit="1/255")), Field("shade", u(10, 10)))
+
+    def validate(self, trig_bits):
+        check_int("trig_bits", trig_bits, 4, 16)
+        self.power = FenneyPower.spec()
+
+    @property
+    def lut(self):
+        return quarter_cos_lut(self.params["trig_bits"])
+
+    @property
+    def latency(self):
+        return 4 + self.power.latency
+
+    def datapath(self, p, v):
+        t = self.params["trig_bits"]
+        v = dict(v)
+        s, r, q = v.pop("s"), v.pop("r"), v.pop("q")
+        a = (r - q)[:8]                                   # subtractor 16, mod 256
+        a7 = a[:7]                                        # cos(a) = -cos(a - 128)
+        fold = Mux(a7 > 64, 128 - a7, a7)[:7]             # |cos(128 - x)| = |cos x|
+        lut = self.lut
+        v = p.stage({**v,
+                     "sin_s": rom(p.m, lut, 256 - s, "sin_s"),     # sin S = cos(90 - S)
+                     "cos_s": rom(p.m, lut, s, "cos_s"),
+                     "cos_d": rom(p.m, lut, fold << 2, "cos_d"),   # cosine unit 18
+                     "neg": (a > 64) & (a < 192)})                 # its sign bit 26
+        k2, k3 = v.pop("k2"), v.pop("k3")
+        v = p.stage({**v, "m12": k2 * v.pop("sin_s"), "m14": k3 * v.pop("cos_s")})
+        v = p.stage({**v, "m20": v.pop("m14") * v.pop("cos_d"),
+                     "a22": (v.pop("k1") << (2 * t)) + (v.pop("m12") << t)})
+        m20, a22 = v.pop("m20"), v.pop("a22")
+        total = Mux(v.pop("neg"), a22 - m20, a22 + m20)             # add/subtract unit 24
+        s11 = ((total + (1 << (2 * t - 1))) >> (2 * t))[:11].as_signed()
+        i8 = Mux(s11 < 0, 0, Mux(s11 > 255, 255, s11))[:8]          # clamp 28
+        v = p.stage({**v, "intensity": i8, "x": (i8 << 2) | (i8 >> 6)})
+        v = self.power.datapath(p, v)                                # power unit 30
+        v["shade"] = v.pop("p")
+        return v

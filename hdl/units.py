@@ -1,0 +1,53 @@
+"""The registry of units: name -> component class. The CLI, the tests and the Verilog export
+all go through it, so a unit registered here is exported, linted, simulated and described."""
+from .illum_unit import FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, TexelDecode
+from .unit import Unit
+
+UNITS = {cls.NAME: cls for cls in (TexelDecode, FenneyPower, FenneyDot, FenneyXZ, FenneyPolar)}
+
+
+class ParamError(ValueError):
+    pass
+
+
+def parse_params(name, pairs):
+    """``["NAME=VALUE", ...]`` -> dict, typed like the unit's defaults."""
+    cls = UNITS[name]
+    out = {}
+    for pair in pairs or ():
+        key, sep, text = pair.partition("=")
+        if not sep:
+            raise ParamError(f"--param {pair!r}: expected NAME=VALUE")
+        if key not in cls.PARAMS:
+            raise ParamError(f"{name}: unknown parameter {key!r}; "
+                             f"known: {', '.join(cls.PARAMS) or 'none'}")
+        default = cls.PARAMS[key]
+        if isinstance(default, bool):
+            if text.lower() not in ("true", "false", "1", "0"):
+                raise ParamError(f"{name}: parameter {key} must be true or false, not {text!r}")
+            out[key] = text.lower() in ("true", "1")
+        elif isinstance(default, int):
+            try:
+                out[key] = int(text, 0)
+            except ValueError:
+                raise ParamError(f"{name}: parameter {key} must be an integer, not {text!r}") from None
+        else:
+            out[key] = text
+    return out
+
+
+def make_unit(name, **params) -> Unit:
+    if name not in UNITS:
+        raise ParamError(f"unknown unit {name!r}; known: {', '.join(UNITS)}")
+    try:
+        return UNITS[name](**params)
+    except (TypeError, ValueError) as e:
+        raise ParamError(str(e)) from None
+
+
+def describe(name):
+    unit = UNITS[name].spec()
+    return {"name": name, "doc": unit.DOC, "params": dict(unit.PARAMS),
+            "latency": unit.latency,
+            "inputs": [f.describe() for f in unit.inputs],
+            "outputs": [f.describe() for f in unit.outputs]}
