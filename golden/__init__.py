@@ -1,0 +1,205 @@
+"""Golden models: for every registered unit, its model, its vectors and its check.
+
+``MODELS[name]`` has
+
+- ``run(inputs, **params)``: output arrays in raw units (integers from a bit-exact model,
+  reals from a float model);
+- ``vectors(rng, n, **params)``: the hard cases of ``design/math-notes.md`` §5 first, then
+  random rows up to ``n``; ``n=None`` gives the full sweep (exhaustive where the input space
+  allows);
+- ``check(inputs, outputs, **params)``: ``{field: (error, bound)}`` per row, where ``error`` is
+  ``|RTL - model|`` (or the distance to the set of allowed values) and ``bound`` the derived
+  limit (0 for bit-exact fields).
+"""
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from . import fenney
+
+__all__ = ["MODELS", "Model"]
+
+
+@dataclass(frozen=True)
+class Model:
+    run: Callable
+    vectors: Callable
+    check: Callable
+    exact: bool  # every output bit-exact
+
+
+def _grid(*axes):
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return [m.ravel().astype(np.int64) for m in mesh]
+
+
+def _cat(*dicts):
+    return {k: np.concatenate([np.asarray(d[k], np.int64) for d in dicts]) for k in dicts[0]}
+
+
+def _random(rng, n, fmts):
+    return {k: rng.integers(lo, hi + 1, size=n) for k, (lo, hi) in fmts.items()}
+
+
+def _exact_check(model):
+    def check(inputs, outputs, **params):
+        want = model(inputs, **params)
+        return {k: (np.abs(np.asarray(outputs[k], np.int64) - want[k]), 0) for k in want}
+    return check
+
+
+# ---- texel_decode ----------------------------------------------------------------------------
+
+def _texel_run(inp, **_):
+    return fenney.texel_decode(inp["texel_x"], inp["texel_z"])
+
+
+def _texel_vectors(rng, n, **_):
+    if n is None:                                                    # all 65,536 texels
+        tx, tz = _grid(np.arange(256), np.arange(256))
+        return {"texel_x": tx, "texel_z": tz}
+    corners = [0, 1, 63, 64, 126, 127, 128, 191, 192, 253, 254, 255]
+    tx, tz = _grid(corners, corners)
+    return _cat({"texel_x": tx, "texel_z": tz},
+                _random(rng, max(0, n - len(tx)), {"texel_x": (0, 255), "texel_z": (0, 255)}))
+
+
+# ---- fenney_power ----------------------------------------------------------------------------
+
+def _power_run(inp, **_):
+    return {"p": fenney.power_int(inp["x"], inp["c"])}
+
+
+def _power_vectors(rng, n, **_):
+    if n is None:                                                    # all 262,144 inputs
+        x, c = _grid(np.arange(1024), np.arange(256))
+        return {"x": x, "c": c}
+    x, c = _grid([0, 1, 2, 511, 512, 1021, 1022, 1023], [0, 1, 2, 127, 128, 254, 255])
+    return _cat({"x": x, "c": c}, _random(rng, max(0, n - len(x)), {"x": (0, 1023), "c": (0, 255)}))
+
+
+# ---- fenney_dot ------------------------------------------------------------------------------
+
+def _flip(a):
+    """-a within s8 (-128 flips to 127)."""
+    return np.minimum(-np.asarray(a), 127)
+
+
+def _unit_lights(rng, n):
+    v = rng.normal(size=(n, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    li = np.trunc(v * 127).astype(np.int64)
+    return {"lx": li[:, 0], "ly": li[:, 1], "lz": li[:, 2]}
+
+
+def _dot_vectors(rng, n, **_):
+    n = 50_000 if n is None else n
+    # hard cases: every corner of the input box (n2 up to 196,097, D at both extremes), the
+    # light straight up and below the horizon, h = 0 and 255
+    ends = [-256, -254, 0, 254, 255]
+    x, y, z, lx, h = _grid(ends, [0, 1, 255], ends, [-128, -127, 0, 127], [0, 128, 255])
+    hard = {"x": x, "y": y, "z": z, "lx": lx, "ly": _flip(lx), "lz": lx, "h": h}
+    m = max(0, n - len(x))
+    half = m // 2
+    # decoded texels (valid and over-filtered) with unit lights ...
+    tex = fenney.texel_decode(rng.integers(0, 256, half), rng.integers(0, 256, half))
+    tex.pop("invalid")
+    decoded = {**tex, **_unit_lights(rng, half), "h": rng.integers(0, 256, half)}
+    # ... and anything the fields can hold
+    anything = _random(rng, m - half, {"x": (-256, 255), "y": (0, 255), "z": (-256, 255),
+                                       "lx": (-128, 127), "ly": (-128, 127),
+                                       "lz": (-128, 127), "h": (0, 255)})
+    return _cat(hard, decoded, anything)
+
+
+def _dot_run(inp, normalize=False, rsqrt_bits=12):
+    return {"x": fenney.dot_float(inp, normalize)}
+
+
+def _dot_check(inp, out, normalize=False, rsqrt_bits=12):
+    err = np.abs(np.asarray(out["x"], float) - fenney.dot_float(inp, normalize))
+    return {"x": (err, fenney.dot_bound(inp, normalize, rsqrt_bits))}
+
+
+# ---- fenney_xz -------------------------------------------------------------------------------
+
+def _xz_dot_inputs(inp):
+    dec = fenney.texel_decode(inp["texel_x"], inp["texel_z"])
+    return {**dec, **{k: inp[k] for k in ("lx", "ly", "lz", "h")}}
+
+
+def _xz_run(inp, normalize=False, rsqrt_bits=12):
+    d = _xz_dot_inputs(inp)
+    x = np.rint(fenney.dot_float(d, normalize))
+    return {"p": fenney.power_int(x, inp["c"]), "invalid": d["invalid"]}
+
+
+def _xz_check(inp, out, normalize=False, rsqrt_bits=12):
+    """``p`` must be P(X, c) for an integer X within the dot product's bound of its float
+    model; P is monotone in X, so the allowed set is every P(X) for X in [lo, hi]."""
+    d = _xz_dot_inputs(inp)
+    x = fenney.dot_float(d, normalize)
+    b = fenney.dot_bound(d, normalize, rsqrt_bits)
+    lo = np.clip(np.ceil(x - b), 0, 1023).astype(np.int64)
+    hi = np.clip(np.floor(x + b), 0, 1023).astype(np.int64)
+    p = np.asarray(out["p"], np.int64)
+    span = int((hi - lo).max()) if len(lo) else 0
+    cand = np.stack([fenney.power_int(np.minimum(lo + k, hi), inp["c"]) for k in range(span + 1)])
+    dist = np.abs(cand - p[None, :]).min(axis=0)
+    inv = np.abs(np.asarray(out["invalid"], np.int64) - d["invalid"])
+    return {"p": (dist, 0), "invalid": (inv, 0)}
+
+
+def _xz_vectors(rng, n, **_):
+    n = 50_000 if n is None else n
+    tx, tz, lx, c = _grid([0, 127, 254, 255], [0, 127, 254, 255], [-128, -127, 0, 127],
+                          [0, 255])
+    hard = {"texel_x": tx, "texel_z": tz, "lx": lx, "ly": _flip(lx), "lz": lx,
+            "h": np.full(len(tx), 255), "c": c}
+    m = max(0, n - len(tx))
+    rnd = {**_random(rng, m, {"texel_x": (0, 255), "texel_z": (0, 255), "h": (0, 255),
+                              "c": (0, 255)}), **_unit_lights(rng, m)}
+    return _cat(hard, rnd)
+
+
+# ---- fenney_polar ----------------------------------------------------------------------------
+
+def _polar_run(inp, trig_bits=10):
+    i = fenney.polar_float(inp)
+    return {"intensity": i, "shade": fenney.power_int(fenney.expand8to10(np.rint(i)), inp["c"])}
+
+
+def _polar_check(inp, out, trig_bits=10):
+    i_rtl = np.asarray(out["intensity"], np.int64)
+    shade = fenney.power_int(fenney.expand8to10(i_rtl), inp["c"])
+    return {"intensity": (np.abs(i_rtl - fenney.polar_float(inp)), fenney.polar_bound(trig_bits)),
+            "shade": (np.abs(np.asarray(out["shade"], np.int64) - shade), 0)}
+
+
+def _polar_vectors(rng, n, **_):
+    if n is None:        # every S against every R - Q, with random k and c
+        s, r = _grid(np.arange(256), np.arange(256))
+        m = len(s)
+        rnd = _random(rng, m, {"k1": (0, 255), "k2": (0, 255), "k3": (0, 255), "q": (0, 255),
+                               "c": (0, 255)})
+        return {"s": s, "r": (r + rnd["q"]) % 256, **rnd}
+    # hard cases: S at 0 and near 90 deg, R - Q at the quadrant edges (and wrapping), the k's
+    # at their ends (the sum reaching -255 and 765), c at 0 and 255
+    s, r, k, c = _grid([0, 1, 128, 254, 255], [0, 63, 64, 65, 127, 128, 129, 191, 192, 193, 255],
+                       [0, 255], [0, 255])
+    hard = {"s": s, "r": r, "k1": k, "k2": k, "k3": 255 - k, "q": np.zeros_like(s), "c": c}
+    hard2 = dict(hard, k1=np.zeros_like(s), k2=np.zeros_like(s), k3=np.full_like(s, 255),
+                 q=np.full_like(s, 128))
+    m = max(0, n - 2 * len(s))
+    rnd = _random(rng, m, {k: (0, 255) for k in ("s", "r", "k1", "k2", "k3", "q", "c")})
+    return _cat(hard, hard2, rnd)
+
+
+MODELS = {
+    "texel_decode": Model(_texel_run, _texel_vectors, _exact_check(_texel_run), True),
+    "fenney_power": Model(_power_run, _power_vectors, _exact_check(_power_run), True),
+    "fenney_dot": Model(_dot_run, _dot_vectors, _dot_check, False),
+    "fenney_xz": Model(_xz_run, _xz_vectors, _xz_check, False),
+    "fenney_polar": Model(_polar_run, _polar_vectors, _polar_check, False),
+}

@@ -1,0 +1,35 @@
+"""Streaming vectors through a unit in Amaranth's simulator."""
+from amaranth.sim import Simulator
+
+from .stream import Traffic, pack, unpack
+
+
+def fields_of(unit):
+    return ([f.describe() for f in unit.inputs], [f.describe() for f in unit.outputs])
+
+
+def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None):
+    """Run every row of ``inputs`` through ``unit``; returns ``(outputs, traffic)``."""
+    fin, fout = fields_of(unit)
+    traffic = Traffic(pack(fin, inputs), p_valid=p_valid, p_ready=p_ready, seed=seed)
+    i_raw, o_raw = unit.i.payload.as_value(), unit.o.payload.as_value()
+
+    async def bench(ctx):
+        while not traffic.done:
+            valid, payload, ready = traffic.drive()
+            ctx.set(unit.i.valid, valid)
+            ctx.set(i_raw, payload)
+            ctx.set(unit.o.ready, ready)
+            _, _, i_ready, o_valid, o_payload = \
+                await ctx.tick().sample(unit.i.ready, unit.o.valid, o_raw)
+            traffic.edge(i_ready, o_valid, o_payload)
+
+    sim = Simulator(unit)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    if vcd:
+        with sim.write_vcd(str(vcd)):
+            sim.run()
+    else:
+        sim.run()
+    return unpack(fout, traffic.out), traffic

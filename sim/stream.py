@@ -1,0 +1,94 @@
+"""Stream traffic shared by every simulator: packing payloads, and the per-cycle handshake.
+
+:class:`Traffic` decides, cycle by cycle, what the source offers and whether the sink is ready,
+with random ``valid`` gaps and ``ready`` stalls from a seed; it records what crossed each
+interface. The Amaranth test bench and the cocotb test bench both drive it, so the same
+vectors run the same way on every simulator.
+"""
+import random
+
+import numpy as np
+
+__all__ = ["pack", "unpack", "Traffic", "StreamError"]
+
+
+class StreamError(RuntimeError):
+    pass
+
+
+def pack(fields, arrays):
+    """Rows of field arrays -> payload integers (first field in the least significant bits)."""
+    n = len(arrays[fields[0]["name"]]) if fields else 0
+    words = [0] * n
+    offset = 0
+    for f in fields:
+        mask = (1 << f["width"]) - 1
+        col = np.asarray(arrays[f["name"]], np.int64).tolist()
+        for k in range(n):
+            words[k] |= (col[k] & mask) << offset
+        offset += f["width"]
+    return words
+
+
+def unpack(fields, words):
+    out, offset = {}, 0
+    for f in fields:
+        w, mask = f["width"], (1 << f["width"]) - 1
+        col = [(word >> offset) & mask for word in words]
+        if f["signed"]:
+            col = [v - (1 << w) if v >> (w - 1) else v for v in col]
+        out[f["name"]] = np.array(col, dtype=np.int64)
+        offset += w
+    return out
+
+
+class Traffic:
+    """The source and sink of one unit under test, with random valid gaps and ready stalls.
+
+    ``drive()`` gives ``(valid, payload, ready)`` to set before a clock edge; ``edge(i_ready,
+    o_valid, o_payload)`` takes what was sampled at that edge. The source holds its payload
+    until it is accepted, as the stream rules require.
+    """
+
+    def __init__(self, words, *, p_valid=1.0, p_ready=1.0, seed=0, max_cycles=None):
+        self.words = words
+        self.rng = random.Random(seed)
+        self.p_valid, self.p_ready = p_valid, p_ready
+        self.sent = 0
+        self.valid = False
+        self.ready = False
+        self.out = []
+        self.cycles = 0
+        self.first_in = self.first_out = None
+        self.max_cycles = max_cycles or (64 + 4 * len(words) / max(1e-3, p_valid * p_ready))
+
+    @property
+    def done(self):
+        return len(self.out) >= len(self.words)
+
+    def drive(self):
+        if not self.valid and self.sent < len(self.words):
+            self.valid = self.p_valid >= 1.0 or self.rng.random() < self.p_valid
+        self.ready = self.p_ready >= 1.0 or self.rng.random() < self.p_ready
+        payload = self.words[self.sent] if self.valid else 0
+        return int(self.valid), payload, int(self.ready)
+
+    def edge(self, i_ready, o_valid, o_payload):
+        if self.valid and i_ready:
+            if self.first_in is None:
+                self.first_in = self.cycles
+            self.sent += 1
+            self.valid = False
+        if o_valid and self.ready:
+            if self.first_out is None:
+                self.first_out = self.cycles
+            self.out.append(o_payload)
+        self.cycles += 1
+        if self.cycles > self.max_cycles:
+            raise StreamError(f"no progress: {len(self.out)} of {len(self.words)} outputs after "
+                              f"{self.cycles} cycles")
+
+    @property
+    def latency(self):
+        """Cycles from the first accepted input to the first output (ready held high)."""
+        return None if self.first_out is None else self.first_out - self.first_in
