@@ -36,11 +36,12 @@ def parse_params(name, pairs):
     return out
 
 
-def make_unit(name, **params) -> Unit:
+def make_unit(name, *, spec=False, **params) -> Unit:
+    """A unit to elaborate, or with ``spec=True`` one used only for its formats and params."""
     if name not in UNITS:
         raise ParamError(f"unknown unit {name!r}; known: {', '.join(UNITS)}")
     try:
-        return UNITS[name](**params)
+        return UNITS[name].spec(**params) if spec else UNITS[name](**params)
     except (TypeError, ValueError) as e:
         raise ParamError(str(e)) from None
 

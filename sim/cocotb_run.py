@@ -67,8 +67,6 @@ def build(name, params, simulator, *, waves=False):
         args = []
         if simulator == "verilator":
             args = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT", "-O2"]
-            if waves:
-                args.append("--trace-fst")
         runner.build(sources=[src], hdl_toplevel=name, build_dir=build_dir, build_args=args,
                      timescale=("1ns", "1ps"), waves=waves, always=True,
                      log_file=build_dir / "build.log")
@@ -86,11 +84,10 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
     Returns ``(outputs, info)`` with ``info = {"latency", "cycles", "waves"}``.
     """
     runner, build_dir = build(name, params, simulator, waves=waves)
-    unit = make_unit(name, **params)
+    unit = make_unit(name, spec=True, **params)
     spec = {"inputs": [f.describe() for f in unit.inputs],
             "outputs": [f.describe() for f in unit.outputs],
             "p_valid": p_valid, "p_ready": p_ready, "seed": seed}
-    unit._MustUse__used = True
     with tempfile.TemporaryDirectory(dir=build_dir) as tmp:
         tmp = Path(tmp)
         (tmp / "spec.json").write_text(json.dumps(spec))
@@ -117,7 +114,8 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
             for pattern in ("*.fst", "*.vcd"):
                 found = sorted(tmp.glob(pattern)) + sorted(build_dir.glob(pattern))
                 if found:
-                    wave = build_dir / f"{name}{found[0].suffix}"
+                    wave = BUILD / "sim" / simulator / f"{name}{found[0].suffix}"
+                    wave.parent.mkdir(parents=True, exist_ok=True)
                     shutil.copy(found[0], wave)
                     break
     info = {"latency": int(got.pop("latency")), "cycles": int(got.pop("cycles")), "waves": wave}

@@ -1,0 +1,41 @@
+# Two commands on a fresh clone: `make test` and `make sim`. Each installs what it needs first.
+PYTHON  ?= python3
+VENV    := .venv
+PY      := $(VENV)/bin/python
+STAMP   := $(VENV)/.installed
+UNIT    ?=
+SIM     ?= icarus
+VECTORS ?= 5000
+# Two pytest workers: CI has two cores.
+JOBS    ?= 2
+
+.PHONY: setup test verilog sim accuracy clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e .
+	touch $@
+
+# Every test: models, RTL on Amaranth's simulator, cocotb on Icarus and Verilator.
+test: setup
+	$(PY) -m pytest -n $(JOBS) --dist loadgroup
+
+# Verilog of every unit into build/verilog/, each linted by Verilator (-Wall).
+verilog: setup
+	$(PY) -m sim verilog
+
+# Golden vectors through the cocotb benches: make sim [UNIT=name] [SIM=icarus|verilator|amaranth]
+# [VECTORS=n|all]. One verdict line per unit; waveforms in build/sim/<sim>/.
+sim: setup
+	$(PY) -m sim check --simulator $(SIM) --vectors $(VECTORS) $(if $(UNIT),--unit $(UNIT))
+
+# Method errors of the Fenney units against the true curves, with plots in build/accuracy/.
+accuracy: setup
+	$(PY) -m golden.accuracy
+
+clean:
+	rm -rf build .pytest_cache .hypothesis results.xml sim_build
+	find . -name __pycache__ -not -path './$(VENV)/*' -prune -exec rm -rf {} +
