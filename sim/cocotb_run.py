@@ -58,8 +58,9 @@ def build(name, params, simulator, *, waves=False):
     if key in _built:
         return _built[key]
     from cocotb_tools.runner import get_runner
-    build_dir = BUILD / "cocotb" / simulator / (_key(name, params) + ("-waves" if waves else ""))
-    src = export(name, params, build_dir)
+    base = BUILD / "cocotb" / simulator / (_key(name, params) + ("-waves" if waves else ""))
+    src = export(name, params, base)
+    build_dir = base / "obj"       # built from scratch: stale Verilator objects break make
     saved = dict(os.environ)
     os.environ.update(_env(simulator))
     try:
@@ -68,8 +69,8 @@ def build(name, params, simulator, *, waves=False):
         if simulator == "verilator":
             args = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT", "-O2"]
         runner.build(sources=[src], hdl_toplevel=name, build_dir=build_dir, build_args=args,
-                     timescale=("1ns", "1ps"), waves=waves, always=True,
-                     log_file=build_dir / "build.log")
+                     timescale=("1ns", "1ps"), waves=waves, always=True, clean=True,
+                     log_file=base / "build.log")
     finally:
         os.environ.clear()
         os.environ.update(saved)

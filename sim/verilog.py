@@ -48,6 +48,11 @@ def verilator_env():
     env = dict(os.environ)
     env["VERILATOR_ROOT"] = str(root)
     env["PATH"] = f"{root / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+    # The wheel's verilated.mk was configured with an empty "read a precompiled header" flag,
+    # so a model big enough to use its PCH passes the header to g++ as a bare file name and
+    # fails to build. A variable in MAKEFLAGS counts as given on make's command line.
+    env["MAKEFLAGS"] = " ".join(filter(None, [env.get("MAKEFLAGS", ""),
+                                              "CFG_CXXFLAGS_PCH_I=-include"]))
     return env
 
 

@@ -1,0 +1,47 @@
+"""Shared test helpers: the simulators, streaming through any of them, checking against golden.
+
+Tests that use one (simulator, unit) pair are grouped onto one xdist worker, so each Verilog
+model is built once per run.
+"""
+import numpy as np
+import pytest
+
+from golden import MODELS
+from hdl.units import make_unit
+from sim.__main__ import simulate
+from sim.cocotb_run import available
+
+
+def _sim_param(name):
+    reason = None if name == "amaranth" else available(name)
+    marks = [pytest.mark.skip(reason=f"{name} tests skipped: {reason}")] if reason else []
+    return pytest.param(name, marks=marks, id=name)
+
+
+SIMULATORS = [_sim_param(s) for s in ("amaranth", "icarus", "verilator")]
+
+
+def params_of(name, params=None):
+    return make_unit(name, spec=True, **(params or {})).params
+
+
+def stream(name, inputs, simulator, params=None, **traffic):
+    """Stream ``inputs`` through the RTL; returns ``(outputs, info)``."""
+    return simulate(name, params_of(name, params), inputs, simulator, **traffic)
+
+
+def assert_golden(name, inputs, outputs, params=None):
+    """Every output row within its derived bound of the golden model (0 for bit-exact)."""
+    params = params_of(name, params)
+    n = len(next(iter(inputs.values())))
+    for field, (err, bound) in MODELS[name].check(inputs, outputs, **params).items():
+        assert len(outputs[field]) == n, f"{name}.{field}: {len(outputs[field])} rows of {n}"
+        over = np.flatnonzero(err > np.broadcast_to(bound, err.shape) + 1e-9)
+        if len(over):
+            k = int(over[0])
+            row = {f: int(v[k]) for f, v in inputs.items()}
+            pytest.fail(f"{name}.{field}: {len(over)} rows beyond the bound; first, row {k}: "
+                        f"inputs {row}, RTL {int(outputs[field][k])}, error {float(err[k]):.4f}"
+                        f" > bound {float(np.broadcast_to(bound, err.shape)[k]):.4f}")
+    return {f: (float(np.max(e)), float(np.max(b)))
+            for f, (e, b) in MODELS[name].check(inputs, outputs, **params).items()}
