@@ -46,14 +46,18 @@ def power_int(x, c):
 
 
 def power_exponent(c, x=np.arange(1, 1024)):
-    """The exponent n whose true curve (x/1023)**n the approximation with concentration c
-    fits best (least squares over X = 1..1023), and the largest error of that fit in LSBs."""
+    """Which power x**n the approximation with concentration c stands for.
+
+    Returns ``(n_fit, max_err, n_half)``: the exponent of the least-squares fit over
+    X = 1..1023 (searched on a log grid from 1 to 1024), the largest error of that fit in LSBs
+    of the 10-bit fraction, and the exponent whose curve falls to 1/2 where P does."""
     p = power_int(x, c) / 1023.0
     t = x / 1023.0
-    ns = np.linspace(1.0, 64.0, 6301)
+    ns = np.geomspace(1.0, 1024.0, 4001)
     err = p[None, :] - t[None, :] ** ns[:, None]
     k = int(np.argmin((err ** 2).sum(axis=1)))
-    return float(ns[k]), float(np.abs(err[k]).max() * 1023)
+    x_half = t[np.argmax(p >= 0.5)]
+    return float(ns[k]), float(np.abs(err[k]).max() * 1023), float(np.log(0.5) / np.log(x_half))
 
 
 # ---- dot product -----------------------------------------------------------------------------

@@ -77,11 +77,16 @@ class Unit(wiring.Component):
 
     def __init__(self, **params):
         unknown = set(params) - set(self.PARAMS)
-        if unknown:
-            raise TypeError(f"{self.NAME}: unknown parameter(s) {', '.join(sorted(unknown))}; "
-                            f"known: {', '.join(self.PARAMS) or 'none'}")
         self.params = {**self.PARAMS, **params}
-        self.validate(**self.params)
+        try:
+            if unknown:
+                raise TypeError(f"{self.NAME}: unknown parameter(s) "
+                                f"{', '.join(sorted(unknown))}; "
+                                f"known: {', '.join(self.PARAMS) or 'none'}")
+            self.validate(**self.params)
+        except (TypeError, ValueError):
+            self._MustUse__silence = True      # never built, so never to be elaborated
+            raise
         super().__init__({
             "i": In(stream.Signature(layout(self.inputs))),
             "o": Out(stream.Signature(layout(self.outputs))),

@@ -1,0 +1,135 @@
+"""The shared machinery: formats, the LUT builder, stream packing, the unit registry, the
+pipeline's latency bookkeeping, constructor validation, and the Verilog export."""
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+from hdl.fixed import Field, FieldError, Fixed, check_arrays, s, u
+from hdl.lut import build_lut
+from hdl.units import UNITS, describe, make_unit, parse_params, ParamError
+from sim.stream import Traffic, pack, unpack
+from sim.verilog import export, lint
+
+
+def test_check_arrays_names_the_field():
+    fields = (Field("a", u(8)), Field("b", s(9)))
+    ok, extra = check_arrays(fields, {"a": [0, 255], "b": [-256, 255], "c": [1, 2]})
+    assert extra == ["c"] and ok["b"].tolist() == [-256, 255]
+    with pytest.raises(FieldError, match="'b' is missing"):
+        check_arrays(fields, {"a": [1]})
+    with pytest.raises(FieldError, match=r"'a' \(u8, range 0..255\) has 256 at row 1"):
+        check_arrays(fields, {"a": [0, 256], "b": [0, 0]})
+    with pytest.raises(FieldError, match=r"'b' \(s9, range -256..255\) has -257 at row 0"):
+        check_arrays(fields, {"a": [0], "b": [-257]})
+    with pytest.raises(FieldError, match="'a' has a non-finite value"):
+        check_arrays(fields, {"a": [np.nan], "b": [0]})
+    with pytest.raises(FieldError, match="'a' has a non-finite value"):
+        check_arrays(fields, {"a": [np.inf], "b": [0]})
+    with pytest.raises(FieldError, match="holds raw integers"):
+        check_arrays(fields, {"a": [1.5], "b": [0]})
+    with pytest.raises(FieldError, match="'b' has 2 rows, others have 1"):
+        check_arrays(fields, {"a": [1], "b": [0, 1]})
+    with pytest.raises(FieldError, match="dtype"):
+        check_arrays(fields, {"a": ["x"], "b": [0]})
+
+
+def test_lut_builder_error_bounds():
+    # exact inputs: the error is the rounding, at most half an LSB, and measured, not assumed
+    lut = build_lut(lambda a: a / 3, 4, u(8, 2))
+    assert lut.contents.tolist() == [round(a * 4 / 3) for a in range(16)]
+    assert lut.max_error == pytest.approx(max(abs(a * 4 / 3 - round(a * 4 / 3))
+                                              for a in range(16)))
+    # interval inputs: entries at bin centres; error includes the change across a bin
+    lut = build_lut(lambda x: x, 3, u(8, 4), domain=(0.0, 8.0))
+    assert lut.contents.tolist() == [8 + 16 * a for a in range(8)]
+    assert lut.max_error == pytest.approx(8.0)          # half a bin of 16 LSB
+    assert lut.address_of([0.0, 7.99, 100.0]).tolist() == [0, 7, 7]
+    with pytest.raises(ValueError, match="do not fit"):
+        build_lut(lambda a: a * 100, 4, u(8))           # never saturated silently
+    with pytest.raises(ValueError, match="non-finite"):
+        build_lut(lambda a: np.where(a > 0, a, np.nan), 4, u(8))
+    with pytest.raises(ValueError, match="address width"):
+        build_lut(lambda a: a, 0, u(8))
+
+
+@given(st.lists(st.tuples(st.integers(0, 255), st.integers(-256, 255), st.integers(0, 1)),
+                min_size=1, max_size=50))
+def test_pack_unpack_round_trip(rows):
+    fields = [Field("a", u(8)).describe(), Field("b", s(9)).describe(),
+              Field("c", u(1)).describe()]
+    arrays = {k: np.array(col) for k, col in zip("abc", zip(*rows))}
+    words = pack(fields, arrays)
+    assert all(0 <= w < 2**18 for w in words)
+    back = unpack(fields, words)
+    assert all(np.array_equal(back[k], arrays[k]) for k in "abc")
+
+
+def test_traffic_holds_payload_until_accepted():
+    t = Traffic([10, 20, 30], p_valid=0.5, p_ready=0.5, seed=4)
+    offered = []
+    while t.sent < 3:
+        valid, payload, _ = t.drive()
+        ready = len(offered) % 3 == 0                   # the DUT accepts every third cycle
+        if valid:
+            offered.append((payload, ready))
+        t.edge(ready, 0, 0)
+    accepted = [p for p, r in offered if r]
+    assert accepted == [10, 20, 30]                     # in order, none lost or repeated
+    held = [p for p, r in offered if not r]
+    assert set(held) <= {10, 20, 30}
+
+
+def test_registry_json_contract():
+    units = [describe(n) for n in UNITS]
+    text = json.dumps({"units": units})
+    for unit in json.loads(text)["units"]:
+        assert set(unit) >= {"name", "params", "inputs", "outputs"}
+        for f in unit["inputs"] + unit["outputs"]:
+            assert set(f) == {"name", "width", "signed", "frac_bits", "unit"}
+    names = {u["name"] for u in units}
+    assert names == {"texel_decode", "fenney_power", "fenney_dot", "fenney_xz", "fenney_polar"}
+    dot = next(u for u in units if u["name"] == "fenney_dot")
+    assert dot["params"] == {"normalize": False, "rsqrt_bits": 12}
+    assert [f["name"] for f in dot["inputs"]] == ["x", "y", "z", "lx", "ly", "lz", "h"]
+
+
+def test_golden_models_cover_every_unit():
+    from golden import MODELS
+    assert set(MODELS) == set(UNITS)
+
+
+def test_constructor_validation():
+    with pytest.raises(TypeError, match="normalize must be True or False, not 1"):
+        UNITS["fenney_dot"](normalize=1)
+    with pytest.raises(ValueError, match="rsqrt_bits must be in 4..16, not 20"):
+        UNITS["fenney_dot"](rsqrt_bits=20)
+    with pytest.raises(TypeError, match="unknown parameter"):
+        UNITS["texel_decode"](width=3)
+    with pytest.raises(TypeError, match="trig_bits must be an integer"):
+        UNITS["fenney_polar"](trig_bits="ten")
+    with pytest.raises(ParamError, match="unknown unit 'nope'"):
+        make_unit("nope")
+    with pytest.raises(ParamError, match="must be an integer, not 'x'"):
+        parse_params("fenney_polar", ["trig_bits=x"])
+    with pytest.raises(ParamError, match="expected NAME=VALUE"):
+        parse_params("fenney_polar", ["trig_bits"])
+    assert parse_params("fenney_dot", ["normalize=true", "rsqrt_bits=0x0e"]) == \
+        {"normalize": True, "rsqrt_bits": 14}
+
+
+def test_fixed_formats():
+    assert (s(9).min, s(9).max, u(10).max) == (-256, 255, 1023)
+    with pytest.raises(ValueError):
+        Fixed(0)
+
+
+@pytest.mark.parametrize("name", list(UNITS))
+def test_verilog_exports_lint_clean(name, tmp_path):
+    path = export(name, None, tmp_path)
+    text = path.read_text()
+    assert f"module {name}(" in text
+    for port in ("i__payload", "i__valid", "i__ready", "o__payload", "o__valid", "o__ready"):
+        assert port in text
+    lint(path, name)            # raises on any warning we have not accepted by name
