@@ -4,6 +4,7 @@ VENV    := .venv
 PY      := $(VENV)/bin/python
 STAMP   := $(VENV)/.installed
 UNIT    ?=
+PARAM   ?=
 SIM     ?= icarus
 VECTORS ?= 5000
 # Two pytest workers: CI has two cores.
@@ -28,9 +29,11 @@ verilog: setup
 	$(PY) -m sim verilog
 
 # Golden vectors through the cocotb benches: make sim [UNIT=name] [SIM=icarus|verilator|amaranth]
-# [VECTORS=n|all]. One verdict line per unit; waveforms in build/sim/<sim>/.
+# [VECTORS=n|all] [PARAM="name=value ..."]. One verdict line per unit; waveforms in
+# build/sim/<sim>/.
 sim: setup
-	$(PY) -m sim check --simulator $(SIM) --vectors $(VECTORS) $(if $(UNIT),--unit $(UNIT))
+	$(PY) -m sim check --simulator $(SIM) --vectors $(VECTORS) $(if $(UNIT),--unit $(UNIT)) \
+		$(foreach p,$(PARAM),--param $(p))
 
 # Method errors of the Fenney units against the true curves, with plots in build/accuracy/.
 accuracy: setup

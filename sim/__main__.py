@@ -22,12 +22,19 @@ SIMS = ("amaranth", "icarus", "verilator")
 
 
 def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=0,
-             waves=None):
-    """Run inputs through the RTL on any simulator; returns ``(outputs, info)``."""
+             waves=None, progress=False):
+    """Run inputs through the RTL on any simulator; returns ``(outputs, info)``.
+
+    With ``progress``, says what it starts, and (Amaranth) reports every tenth of the rows."""
+    if progress:
+        rows = len(next(iter(inputs.values())))
+        how = "Amaranth's simulator" if simulator == "amaranth" else f"cocotb on {simulator}"
+        print(f"{name}: streaming {rows} rows through {how}", file=sys.stderr, flush=True)
     if simulator == "amaranth":
         from .amaranth_run import run_amaranth
         out, traffic = run_amaranth(make_unit(name, **params), inputs, p_valid=p_valid,
-                                    p_ready=p_ready, seed=seed, vcd=waves)
+                                    p_ready=p_ready, seed=seed, vcd=waves,
+                                    progress=name if progress else None)
         return out, {"latency": traffic.latency, "cycles": traffic.cycles, "waves": waves}
     from .cocotb_run import SimulatorMissing, run_cocotb
     try:
@@ -59,7 +66,7 @@ def cmd_run(args):
     inputs = read_inputs(unit, args.inp)
     n = len(next(iter(inputs.values())))
     t0 = time.time()
-    out, info = simulate(args.unit, unit.params, inputs, args.simulator)
+    out, info = simulate(args.unit, unit.params, inputs, args.simulator, progress=True)
     write_outputs(unit, args.out, out)
     print(f"{args.unit} on {args.simulator}: {n} rows in {info['cycles']} cycles "
           f"({time.time() - t0:.1f} s) -> {args.out}")
@@ -90,7 +97,8 @@ def cmd_check(args):
         t0 = time.time()
         out, info = simulate(name, params, inputs, args.simulator, p_valid=args.p_valid,
                              p_ready=args.p_ready, seed=args.seed,
-                             waves=waves if args.simulator == "amaranth" else True)
+                             waves=waves if args.simulator == "amaranth" else True,
+                             progress=True)
         result = MODELS[name].check(inputs, out, **params)
         bad = {k: int(np.sum(e > b + 1e-9)) for k, (e, b) in result.items()}
         errs = ", ".join(f"{k} {float(np.max(e)):.3g}/{float(np.max(b)):.3g}"

@@ -8,10 +8,11 @@ def fields_of(unit):
     return ([f.describe() for f in unit.inputs], [f.describe() for f in unit.outputs])
 
 
-def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None):
+def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, progress=None):
     """Run every row of ``inputs`` through ``unit``; returns ``(outputs, traffic)``."""
     fin, fout = fields_of(unit)
-    traffic = Traffic(pack(fin, inputs), p_valid=p_valid, p_ready=p_ready, seed=seed)
+    traffic = Traffic(pack(fin, inputs), p_valid=p_valid, p_ready=p_ready, seed=seed,
+                      progress=progress)
     i_raw, o_raw = unit.i.payload.as_value(), unit.o.payload.as_value()
 
     async def bench(ctx):

@@ -6,6 +6,7 @@ interface. The Amaranth test bench and the cocotb test bench both drive it, so t
 vectors run the same way on every simulator.
 """
 import random
+import sys
 
 import numpy as np
 
@@ -50,8 +51,11 @@ class Traffic:
     until it is accepted, as the stream rules require.
     """
 
-    def __init__(self, words, *, p_valid=1.0, p_ready=1.0, seed=0, max_cycles=None):
+    def __init__(self, words, *, p_valid=1.0, p_ready=1.0, seed=0, max_cycles=None,
+                 progress=None):
         self.words = words
+        self.progress = progress          # a label: report every tenth of the rows on stderr
+        self._tenth = max(1, len(words) // 10)
         self.rng = random.Random(seed)
         self.p_valid, self.p_ready = p_valid, p_ready
         self.sent = 0
@@ -83,6 +87,9 @@ class Traffic:
             if self.first_out is None:
                 self.first_out = self.cycles
             self.out.append(o_payload)
+            if self.progress and len(self.out) % self._tenth == 0:
+                print(f"{self.progress}: {len(self.out)}/{len(self.words)} rows",
+                      file=sys.stderr, flush=True)
         self.cycles += 1
         if self.cycles > self.max_cycles:
             raise StreamError(f"no progress: {len(self.out)} of {len(self.words)} outputs after "

@@ -85,3 +85,57 @@ def test_xz_latency_is_the_sum_of_its_parts():
         parts = [UNITS[n].spec(**p) for n, p in (("texel_decode", {}),
                  ("fenney_dot", {"normalize": normalize}), ("fenney_power", {}))]
         assert xz.latency == sum(p.latency for p in parts) == (10 if normalize else 9)
+
+
+# The hard cases of design/math-notes.md §5, with the values the patent's formulas give.
+HARD = {
+    "texel_decode": [  # (inputs, expected outputs)
+        ({"texel_x": 255, "texel_z": 127}, {"x": 254, "y": 1, "z": 0, "invalid": 1}),
+        ({"texel_x": 255, "texel_z": 255}, {"x": 254, "y": 0, "z": 254, "invalid": 1}),
+        ({"texel_x": 0, "texel_z": 0}, {"x": -254, "y": 0, "z": -254, "invalid": 1}),
+        ({"texel_x": 191, "texel_z": 190}, {"x": 128, "y": 1, "z": 126, "invalid": 0}),
+        ({"texel_x": 191, "texel_z": 191}, {"x": 128, "y": 0, "z": 128, "invalid": 1}),
+        ({"texel_x": 127, "texel_z": 127}, {"x": 0, "y": 255, "z": 0, "invalid": 0}),
+    ],
+    "fenney_power": [
+        ({"x": 0, "c": 0}, {"p": 0}), ({"x": 1023, "c": 0}, {"p": 1023}),
+        ({"x": 1023, "c": 255}, {"p": 1022}), ({"x": 0, "c": 255}, {"p": 0}),
+        ({"x": 500, "c": 0}, {"p": 500}),
+        # k = 263: L = 1023 - (263 * 23 >> 3) = 267, Q = 267**2 >> 10 = 69,
+        # P = 267 + (255 * (69 - 267) >> 8) = 267 - 198
+        ({"x": 1000, "c": 255}, {"p": 69}),
+    ],
+    "fenney_dot": [   # light below the horizon saturates at 0; straight up at full scale
+        ({"x": 0, "y": 255, "z": 0, "lx": 0, "ly": -127, "lz": 0, "h": 255}, {"x": 0}),
+        ({"x": 0, "y": 255, "z": 0, "lx": 0, "ly": 127, "lz": 0, "h": 255}, {"x": 1023}),
+        ({"x": 0, "y": 255, "z": 0, "lx": 0, "ly": -127, "lz": 0, "h": 0}, {"x": 1023}),
+        ({"x": 0, "y": 255, "z": 0, "lx": 0, "ly": 0, "lz": 0, "h": 255}, {"x": 0}),
+    ],
+    "fenney_polar": [  # sums past 255 and below 0 clamp; R - Q wraps
+        ({"s": 0, "r": 0, "k1": 255, "k2": 255, "k3": 255, "q": 0, "c": 0},
+         {"intensity": 255, "shade": 1023}),
+        ({"s": 0, "r": 128, "k1": 0, "k2": 0, "k3": 255, "q": 0, "c": 0},
+         {"intensity": 0, "shade": 0}),
+        ({"s": 0, "r": 1, "k1": 0, "k2": 0, "k3": 255, "q": 255, "c": 0},  # R - Q = 2 steps
+         {"intensity": 255, "shade": 1023}),
+        ({"s": 0, "r": 64, "k1": 100, "k2": 0, "k3": 255, "q": 0, "c": 0},  # cos 90 = 0
+         {"intensity": 100, "shade": 401}),
+    ],
+}
+
+
+def hard_cases():
+    for sim in SIMULATORS:
+        for name in HARD:
+            yield pytest.param(sim.values[0], name, marks=[*sim.marks,
+                               grouped(sim.values[0], name)], id=f"{sim.values[0]}-{name}")
+
+
+@pytest.mark.parametrize("simulator,name", list(hard_cases()))
+def test_hard_cases(simulator, name):
+    rows, want = zip(*HARD[name])
+    inputs = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+    out, _ = stream(name, inputs, simulator)
+    for k in want[0]:
+        assert out[k].tolist() == [w[k] for w in want], k
+    assert_golden(name, inputs, out)
