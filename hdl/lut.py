@@ -5,6 +5,7 @@ Every table in the project (trigonometric, reciprocal square root, ...) comes fr
 the tests can state their bounds from ``Lut.max_error``.
 """
 from dataclasses import dataclass
+import functools
 import operator
 
 import numpy as np
@@ -96,6 +97,7 @@ def rom(m, lut, addr, name):
     return Value.cast(port.data)
 
 
+@functools.lru_cache(maxsize=None)
 def quarter_cos_lut(frac_bits, steps=256):
     """cos over a quarter turn, both ends included: entry a is cos(a/steps * 90 deg).
 

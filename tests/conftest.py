@@ -5,6 +5,11 @@ model is built once per run.
 """
 import numpy as np
 import pytest
+from hypothesis import settings
+
+# Property tests check values, not speed: no per-example deadline on a loaded CI machine.
+settings.register_profile("shading", deadline=None)
+settings.load_profile("shading")
 
 from golden import MODELS
 from hdl.units import make_unit

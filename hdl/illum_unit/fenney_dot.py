@@ -24,6 +24,8 @@ table entry ``2**29 / (127 * |b|)``. Then ``M = (255 - h) * 2**14 + h * dq`` and
 ``out = round(M * 1024 / (255 * 2**14)) = round(M / 4080)``, done as ``M * K >> 36``. The bound
 these roundings give against the float model is derived in ``golden.fenney.dot_bound``.
 """
+import functools
+
 import numpy as np
 from amaranth.hdl import Mux
 
@@ -39,6 +41,7 @@ MIN_LEN = 128                # shortest |b| (of 255) the table renormalises exac
 G_PLAIN = round(2**G_FRAC / (127 * 255))
 
 
+@functools.lru_cache(maxsize=None)
 def rsqrt_lut(addr_bits):
     """g(n2) = 2**29 / (127 * sqrt(max(n2, 128**2))) over n2 in [0, 65536)."""
     return build_lut(lambda n2: 2.0**G_FRAC / (127 * np.sqrt(np.maximum(n2, MIN_LEN**2))),
