@@ -16,7 +16,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import fenney
+from . import angular, fenney
 
 __all__ = ["MODELS", "Model"]
 
@@ -196,10 +196,49 @@ def _polar_vectors(rng, n, **_):
     return _cat(hard, hard2, rnd)
 
 
+# ---- illum (seed 003) ------------------------------------------------------------------------
+
+ILLUM_FIELDS = ("phi_l", "theta_l", "phi_h", "theta_h", "phi_n", "theta_n")
+
+
+def _illum_run(inp, **params):
+    return angular.illum_float(inp, **params)
+
+
+def _illum_check(inp, out, **params):
+    want = angular.illum_float(inp, **params)
+    bounds = angular.illum_bounds(**params)
+    return {k: (np.abs(np.asarray(out[k], float) - want[k]), bounds[k]) for k in want}
+
+
+def _illum_vectors(rng, n, angle_bits=10, **_):
+    n = 50_000 if n is None else n
+    full, half, quarter = 1 << angle_bits, 1 << (angle_bits - 1), 1 << (angle_bits - 2)
+    # hard cases: N' = A' (inner product 1), opposite (negative, clamps), theta sums past
+    # 180 deg, theta = 0 (phi meaningless), phi wrapping at 0/360, quarter-turn edges
+    edge = [0, 1, quarter - 1, quarter, quarter + 1, half - 1, half, full - 1]
+    pa, ta, pn, tn = _grid(edge, edge[:7], [0, full - 1, half], [0, quarter, half])
+    hard = {"phi_l": pa, "theta_l": ta, "phi_h": pn, "theta_h": tn, "phi_n": pn,
+            "theta_n": tn}
+    m = max(0, n - len(pa))
+    rnd = _random(rng, m, {k: (0, full - 1) for k in ILLUM_FIELDS})
+    for k in ILLUM_FIELDS:
+        if k.startswith("theta"):
+            rnd[k] = rnd[k] % (half + 1)                            # polar angle 0..180 deg
+    # a quarter of the random rows light near the normal, where the specular table is steep
+    near = rnd["phi_n"][: m // 4], rnd["theta_n"][: m // 4]
+    for a in ("l", "h"):
+        jitter = rng.integers(-8, 9, size=(2, len(near[0])))
+        rnd[f"phi_{a}"][: m // 4] = (near[0] + jitter[0]) % full
+        rnd[f"theta_{a}"][: m // 4] = np.clip(near[1] + jitter[1], 0, half)
+    return _cat(hard, rnd)
+
+
 MODELS = {
     "texel_decode": Model(_texel_run, _texel_vectors, _exact_check(_texel_run), True),
     "fenney_power": Model(_power_run, _power_vectors, _exact_check(_power_run), True),
     "fenney_dot": Model(_dot_run, _dot_vectors, _dot_check, False),
     "fenney_xz": Model(_xz_run, _xz_vectors, _xz_check, False),
     "fenney_polar": Model(_polar_run, _polar_vectors, _polar_check, False),
+    "illum": Model(_illum_run, _illum_vectors, _illum_check, False),
 }

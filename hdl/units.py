@@ -1,9 +1,10 @@
 """The registry of units: name -> component class. The CLI, the tests and the Verilog export
 all go through it, so a unit registered here is exported, linted, simulated and described."""
-from .illum_unit import FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, TexelDecode
+from .illum_unit import FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, Illum, TexelDecode
 from .unit import Unit
 
-UNITS = {cls.NAME: cls for cls in (TexelDecode, FenneyPower, FenneyDot, FenneyXZ, FenneyPolar)}
+UNITS = {cls.NAME: cls for cls in (TexelDecode, FenneyPower, FenneyDot, FenneyXZ, FenneyPolar,
+                                   Illum)}
 
 
 class ParamError(ValueError):

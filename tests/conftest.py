@@ -50,3 +50,18 @@ def assert_golden(name, inputs, outputs, params=None):
                         f" > bound {float(np.broadcast_to(bound, err.shape)[k]):.4f}")
     return {f: (float(np.max(e)), float(np.max(b)))
             for f, (e, b) in MODELS[name].check(inputs, outputs, **params).items()}
+
+
+def per_simulator(cases, only=None):
+    """``pytest.param(simulator, *case)`` for every simulator (or those in ``only``) and case,
+    grouped by (simulator, unit) onto one xdist worker: ``case[0]`` is the unit's name."""
+    for sim in SIMULATORS:
+        name = sim.values[0]
+        if only and name not in only:
+            continue
+        for case in cases:
+            case = case if isinstance(case, tuple) else (case,)
+            extra = "".join(f"-{k}={v}" for c in case[1:] if isinstance(c, dict)
+                            for k, v in c.items())
+            yield pytest.param(name, *case, id=f"{name}-{case[0]}{extra}", marks=[
+                *sim.marks, pytest.mark.xdist_group(f"{name}-{case[0]}")])

@@ -1,4 +1,5 @@
-"""The Fenney units' RTL against their golden models, on every simulator.
+"""The Fenney units: full sweeps and named hard cases on the RTL (every unit's backpressure and
+throughput tests are in test_units_rtl.py).
 
 Bounds: texel_decode, fenney_power, the shade of fenney_polar and fenney_xz's p are bit-exact
 (bound 0; fenney_xz: p must be P(X) for an X within fenney_dot's bound). fenney_dot and the
@@ -11,75 +12,24 @@ import pytest
 from golden import MODELS
 from hdl.units import UNITS
 
-from .conftest import SIMULATORS, assert_golden, params_of, stream
+from .conftest import assert_golden, per_simulator, stream
 
-CONFIGS = [("texel_decode", {}), ("fenney_power", {}), ("fenney_dot", {}),
-           ("fenney_dot", {"normalize": True}), ("fenney_xz", {}),
-           ("fenney_xz", {"normalize": True}), ("fenney_polar", {})]
-IDS = [n + "".join(f"-{k}={v}" for k, v in p.items()) for n, p in CONFIGS]
-
-
-def grouped(simulator, name):
-    return pytest.mark.xdist_group(f"{simulator}-{name}")
+# the full sweeps: texel_decode's 65,536 texels on every simulator; fenney_power's 262,144
+# inputs and fenney_polar's S x (R - Q) on Verilator, the fastest
+FULL_SWEEPS = [*per_simulator(["texel_decode"]),
+               *per_simulator(["fenney_power", "fenney_polar"], only=("verilator",))]
 
 
-def cases():
-    for sim in SIMULATORS:
-        for (name, params), ident in zip(CONFIGS, IDS):
-            yield pytest.param(sim.values[0], name, params, marks=[*sim.marks,
-                               grouped(sim.values[0], name)], id=f"{sim.values[0]}-{ident}")
-
-
-@pytest.mark.parametrize("simulator,name,params", list(cases()))
-def test_backpressure(simulator, name, params):
-    """Hard cases then random rows, with random valid gaps (30 %) and ready stalls (40 %):
-    every output within its bound, none lost, repeated or reordered (rows compare 1:1)."""
-    inputs = MODELS[name].vectors(np.random.default_rng(7), 12_000, **params_of(name, params))
-    out, _ = stream(name, inputs, simulator, params, p_valid=0.7, p_ready=0.6, seed=3)
-    assert_golden(name, inputs, out, params)
-
-
-@pytest.mark.parametrize("simulator,name,params", list(cases()))
-def test_one_per_clock(simulator, name, params):
-    """With valid and ready held high, n rows take n + latency cycles, and the first output
-    appears exactly ``latency`` cycles after the first input."""
-    inputs = MODELS[name].vectors(np.random.default_rng(1), 500, **params_of(name, params))
-    n = len(next(iter(inputs.values())))
-    out, info = stream(name, inputs, simulator, params)
-    latency = UNITS[name].spec(**params).latency
-    assert info["latency"] == latency
-    assert info["cycles"] == n + latency
-    assert_golden(name, inputs, out, params)
-
-
-def full_sweeps():
-    # (unit, simulators that run its full sweep)
-    plan = {"texel_decode": ("amaranth", "icarus", "verilator"),  # all 65,536 texels
-            "fenney_power": ("verilator",),                       # all 262,144 inputs
-            "fenney_polar": ("verilator",)}                       # every S x (R - Q)
-    for sim in SIMULATORS:
-        for name, sims in plan.items():
-            if sim.values[0] in sims:
-                yield pytest.param(sim.values[0], name, marks=[*sim.marks,
-                                   grouped(sim.values[0], name)], id=f"{sim.values[0]}-{name}")
-
-
-@pytest.mark.parametrize("simulator,name", list(full_sweeps()))
+@pytest.mark.parametrize("simulator,name", FULL_SWEEPS)
 def test_full_sweep(simulator, name):
     inputs = MODELS[name].vectors(np.random.default_rng(11), None)
     out, _ = stream(name, inputs, simulator)
     assert_golden(name, inputs, out)
 
 
-def power_subset_cases():
-    for sim in SIMULATORS:
-        if sim.values[0] != "verilator":                  # verilator sweeps all of them
-            yield pytest.param(sim.values[0], marks=[*sim.marks, grouped(sim.values[0],
-                               "fenney_power")], id=sim.values[0])
-
-
-@pytest.mark.parametrize("simulator", list(power_subset_cases()))
-def test_power_random_subset(simulator):
+@pytest.mark.parametrize("simulator,name", list(per_simulator(["fenney_power"],
+                                                            only=("amaranth", "icarus"))))
+def test_power_random_subset(simulator, name):
     """The power unit's random subset on the paths that do not sweep all 262,144 inputs."""
     inputs = MODELS["fenney_power"].vectors(np.random.default_rng(5), 40_000)
     out, _ = stream("fenney_power", inputs, simulator)
@@ -131,14 +81,7 @@ HARD = {
 }
 
 
-def hard_cases():
-    for sim in SIMULATORS:
-        for name in HARD:
-            yield pytest.param(sim.values[0], name, marks=[*sim.marks,
-                               grouped(sim.values[0], name)], id=f"{sim.values[0]}-{name}")
-
-
-@pytest.mark.parametrize("simulator,name", list(hard_cases()))
+@pytest.mark.parametrize("simulator,name", list(per_simulator(list(HARD))))
 def test_hard_cases(simulator, name):
     rows, want = zip(*HARD[name])
     inputs = {k: np.array([r[k] for r in rows]) for k in rows[0]}

@@ -22,6 +22,7 @@ from amaranth.hdl import Mux
 
 from ..fixed import Field, u
 from ..lut import quarter_cos_lut, rom
+from ..trig import cos_lookup
 from ..unit import Unit, check_int
 from .fenney_power import FenneyPower
 
@@ -53,15 +54,12 @@ class FenneyPolar(Unit):
         t = self.params["trig_bits"]
         v = dict(v)
         s, r, q = v.pop("s"), v.pop("r"), v.pop("q")
-        a = (r - q)[:8]                                   # subtractor 16, mod 256
-        a7 = a[:7]                                        # cos(a) = -cos(a - 128)
-        fold = Mux(a7 > 64, 128 - a7, a7)[:7]             # |cos(128 - x)| = |cos x|
         lut = self.lut
+        cos_d, neg = cos_lookup(p.m, lut, r - q, 8, "cos_d")      # subtractor 16, unit 18
         v = p.stage({**v,
                      "sin_s": rom(p.m, lut, 256 - s, "sin_s"),     # sin S = cos(90 - S)
                      "cos_s": rom(p.m, lut, s, "cos_s"),
-                     "cos_d": rom(p.m, lut, fold << 2, "cos_d"),   # cosine unit 18
-                     "neg": (a > 64) & (a < 192)})                 # its sign bit 26
+                     "cos_d": cos_d, "neg": neg})                  # sign bit 26
         k2, k3 = v.pop("k2"), v.pop("k3")
         v = p.stage({**v, "m12": k2 * v.pop("sin_s"), "m14": k3 * v.pop("cos_s")})
         v = p.stage({**v, "m20": v.pop("m14") * v.pop("cos_d"),

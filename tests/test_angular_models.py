@@ -6,7 +6,7 @@ results on every hard case it leaves open."""
 import numpy as np
 from hypothesis import given, strategies as st
 
-from golden import rotation as rot
+from golden import angular as rot
 
 DEG = np.pi / 180
 

@@ -112,3 +112,42 @@ def method_error(n=200_000, seed=0):
         rows.append((lo, hi, int(m.sum()), a.mean(), np.percentile(a, 99), a.max(),
                      e.mean(), np.percentile(e, 99), e.max()))
     return rows, sep, angle
+
+
+# ---- the illumination unit's model and bounds (hdl/illum_unit/illum.py) ----------------------
+
+def turns(raw, bits):
+    return np.asarray(raw, float) * (2 * np.pi / 2**bits)
+
+
+def illum_float(inp, angle_bits=10, trig_bits=14, table_bits=10, shininess=16):
+    """Clamped inner products, diffuse d and specular d**shininess, in LSBs of 2**-15."""
+    a = {k: turns(v, angle_bits) for k, v in inp.items()}
+    out = {}
+    for v in ("l", "h"):
+        d = np.clip(inner_product(a[f"phi_{v}"], a[f"theta_{v}"], a["phi_n"], a["theta_n"]),
+                    0.0, 1.0)
+        out[f"dot_{v}"] = d * 2**15
+        out[{"l": "diffuse", "h": "specular"}[v]] = d ** (1 if v == "l" else shininess) * 2**15
+    return out
+
+
+def illum_bounds(angle_bits=10, trig_bits=14, table_bits=10, shininess=16):
+    """Bounds on |RTL - illum_float| in LSBs of 2**-15, per output.
+
+    Each cosine entry is within e LSB of 2**-T (e = the table's measured error), so
+    eps = e 2**-T. Then 1/2 (c- + c+) is within eps, and 1/2 (c- - c+) cf within
+    eps |cf| + eps |c- - c+| / 2 + eps**2 <= 2 eps + eps**2: the inner product within
+    3 eps + eps**2, plus half an LSB for the rounding (clamping is 1-Lipschitz).
+    A table output is within the table's error of f(d_RTL) (the builder measures it over the
+    whole bin d_RTL falls in) and f(d_RTL) within max|f'| |d_RTL - d| of f(d): max|f'| is 1
+    for the diffuse table and the shininess for the specular one."""
+    from hdl.illum_unit.illum import shade_lut
+    from hdl.lut import quarter_cos_lut
+    eps = quarter_cos_lut(trig_bits, 1 << (angle_bits - 2)).max_error * 2.0**-trig_bits
+    dot = (3 * eps + eps * eps) * 2**15 + 0.5
+    dot_value = dot * 2.0**-15
+    return {"dot_l": dot, "dot_h": dot,
+            "diffuse": shade_lut(table_bits, 1).max_error + dot_value * 2**15,
+            "specular": shade_lut(table_bits, shininess).max_error
+            + shininess * dot_value * 2**15}
