@@ -10,7 +10,7 @@ VECTORS ?= 5000
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup test verilog sim accuracy clean
+.PHONY: setup test verilog sim report accuracy clean
 
 setup: $(STAMP)
 
@@ -35,7 +35,11 @@ sim: setup
 	$(PY) -m sim check --simulator $(SIM) --vectors $(VECTORS) $(if $(UNIT),--unit $(UNIT)) \
 		$(foreach p,$(PARAM),--param $(p))
 
-# Method errors of the Fenney units against the true curves, with plots in build/accuracy/.
+# Hardware counts of every unit from Yosys (multipliers, adders, tables), beside the seeds'.
+report: setup
+	$(PY) -m sim.report
+
+# Method errors (Fenney units, seed 003's rotation) with plots in build/accuracy/.
 accuracy: setup
 	$(PY) -m golden.accuracy
 

@@ -1,11 +1,12 @@
-"""``python -m golden.accuracy``: what the Fenney methods cost in accuracy, with plots.
+"""``python -m golden.accuracy``: what the methods cost in accuracy, with plots.
 
-Prints three tables and writes their plots to ``build/accuracy/``:
+Prints four tables and writes their plots to ``build/accuracy/``:
 
 1. the power approximation against the true power curves (which exponent each C stands for);
 2. the dot product against the true cosine, plain (the patent's L1-scaled vector) and
    renormalised, with the hardware's 8-bit encodings of normal and light;
-3. the fixed-point bounds of the RTL against these float models, per parameter setting.
+3. the fixed-point bounds of the RTL against these float models, per parameter setting;
+4. seed 003's published vector rotation against the exact rotation.
 """
 import argparse
 from pathlib import Path
@@ -19,7 +20,7 @@ import numpy as np  # noqa: E402
 from hdl.illum_unit.fenney_dot import rsqrt_lut  # noqa: E402
 from hdl.lut import quarter_cos_lut  # noqa: E402
 
-from . import fenney  # noqa: E402
+from . import angular, fenney  # noqa: E402
 
 OUT = Path(__file__).resolve().parent.parent / "build" / "accuracy"
 C_TABLE = (0, 1, 8, 16, 32, 64, 96, 128, 160, 192, 224, 255)
@@ -95,6 +96,31 @@ def bound_table():
               f"error {lut.max_error:6.2f} LSB of g, bound {b:.3f} (valid texels)")
 
 
+def rotation_table(out, n=200_000):
+    print("\n4. Seed 003's published rotation against the exact rotation (float, no fixed "
+          "point;\n   N and A uniform on the upper hemisphere), by the angle between N and A")
+    rows, sep, angle = angular.method_error(n)
+    print(f"   {'N-A angle':>10} {'count':>7} {'angle error (deg): mean':>24} {'p99':>7} "
+          f"{'max':>7} {'|N.A error|: mean':>18} {'p99':>7} {'max':>7}")
+    for lo, hi, cnt, a_mean, a_99, a_max, e_mean, e_99, e_max in rows:
+        print(f"   {f'{lo}-{hi}':>10} {cnt:7d} {a_mean:24.2f} {a_99:7.2f} {a_max:7.2f} "
+              f"{e_mean:18.4f} {e_99:7.4f} {e_max:7.4f}")
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    edges = np.arange(0, 91, 5)
+    idx = np.digitize(sep, edges) - 1
+    keep = (idx >= 0) & (idx < len(edges) - 1)
+    centre = (edges[:-1] + edges[1:]) / 2
+    for q, label in ((50, "median"), (99, "99th percentile"), (100, "maximum")):
+        ax.plot(centre, [np.percentile(angle[keep & (idx == k)], q) for k in range(len(centre))],
+                marker="o", label=label)
+    ax.set(xlabel="angle between N and A (deg)", ylabel="angle between rotated vectors (deg)",
+           title="Seed 003 rotation: method error against the exact rotation")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / "rotation_method_error.png", dpi=120)
+    plt.close(fig)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m golden.accuracy", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -104,7 +130,9 @@ def main(argv=None):
     power_table(args.out)
     dot_table(args.out)
     bound_table()
-    print(f"\nplots: {args.out / 'fenney_power.png'}, {args.out / 'fenney_dot.png'}")
+    rotation_table(args.out)
+    print("\nplots: " + ", ".join(str(args.out / f) for f in (
+        "fenney_power.png", "fenney_dot.png", "rotation_method_error.png")))
 
 
 if __name__ == "__main__":

@@ -1,0 +1,13 @@
+"""Hardware counts from Yosys against the seeds' own counts."""
+from sim.report import count
+
+
+def test_power_unit_is_the_patents_three_multiplies_and_five_add_subtracts(tmp_path):
+    c = count("fenney_power", work=tmp_path)
+    assert (c["mul"], c["const_mul"], c["add"]) == (3, 0, 5)
+
+
+def test_illumination_has_table_1s_multipliers_and_luts(tmp_path):
+    """Seed 003 Table 1: 2 multipliers and 8 LUTs (6 cosine tables, diffuse, specular)."""
+    c = count("illum", work=tmp_path)
+    assert (c["mul"], c["const_mul"], c["tables"]) == (2, 0, 8)
