@@ -234,6 +234,41 @@ def _illum_vectors(rng, n, angle_bits=10, **_):
     return _cat(hard, rnd)
 
 
+# ---- rotation (seed 003) ---------------------------------------------------------------------
+
+def _rotation_run(inp, **params):
+    return angular.rotation_float(inp, **params)
+
+
+def _rotation_check(inp, out, **params):
+    """phi' compared around the circle; both within the interval bounds of
+    golden.angular.rotation_bounds."""
+    bits = params.get("angle_bits", 12)
+    want = angular.rotation_float(inp, **params)
+    bounds = angular.rotation_bounds(inp, **params)
+    full = 2.0**bits
+    dphi = np.abs(np.asarray(out["phi"], float) - want["phi"]) % full
+    return {"phi": (np.minimum(dphi, full - dphi), bounds["phi"]),
+            "theta": (np.abs(np.asarray(out["theta"], float) - want["theta"]), bounds["theta"])}
+
+
+def _rotation_vectors(rng, n, angle_bits=12, **_):
+    n = 50_000 if n is None else n
+    full, half, quarter = 1 << angle_bits, 1 << (angle_bits - 1), 1 << (angle_bits - 2)
+    # hard cases: theta_N = 0 with any phi_N; theta_A = 0; D = 0 and 180 deg (exact cases);
+    # phi wrapping at 0/360; theta_A = theta_N (sin Z -> 0); A 90 deg from N (cos Z -> 0,
+    # |yk| >= 1); theta at 90 deg (asin at +-1); results below the horizon; theta sums past
+    # 180 deg
+    edge_t = [0, 1, quarter // 2, quarter - 1, quarter, quarter + 1, half]
+    edge_p = [0, 1, quarter, half, full - 1]
+    pn, tn, pa, ta = _grid(edge_p, edge_t, edge_p, edge_t)
+    hard = {"phi_n": pn, "theta_n": tn, "phi_a": pa, "theta_a": ta}
+    m = max(0, n - len(pn))
+    pn, pa = rng.integers(0, full, (2, m))
+    tn, ta = rng.integers(0, quarter + 1, (2, m))                    # both on the hemisphere
+    return _cat(hard, {"phi_n": pn, "theta_n": tn, "phi_a": pa, "theta_a": ta})
+
+
 MODELS = {
     "texel_decode": Model(_texel_run, _texel_vectors, _exact_check(_texel_run), True),
     "fenney_power": Model(_power_run, _power_vectors, _exact_check(_power_run), True),
@@ -241,4 +276,5 @@ MODELS = {
     "fenney_xz": Model(_xz_run, _xz_vectors, _xz_check, False),
     "fenney_polar": Model(_polar_run, _polar_vectors, _polar_check, False),
     "illum": Model(_illum_run, _illum_vectors, _illum_check, False),
+    "rotation": Model(_rotation_run, _rotation_vectors, _rotation_check, False),
 }

@@ -151,3 +151,105 @@ def illum_bounds(angle_bits=10, trig_bits=14, table_bits=10, shininess=16):
             "diffuse": shade_lut(table_bits, 1).max_error + dot_value * 2**15,
             "specular": shade_lut(table_bits, shininess).max_error
             + shininess * dot_value * 2**15}
+
+
+# ---- the rotation unit's model and bounds (hdl/rotation_unit/rotation.py) --------------------
+
+def rotation_float(inp, angle_bits=12, **_):
+    """The published method on the inputs' binary angles; (phi', theta') in raw LSBs."""
+    a = {k: turns(v, angle_bits) for k, v in inp.items()}
+    phi, theta = rotate_paper(a["phi_n"], a["theta_n"], a["phi_a"], a["theta_a"])
+    scale = 2**angle_bits / (2 * np.pi)
+    return {"phi": phi * scale, "theta": theta * scale}
+
+
+def _range_abs_sin(lo, hi):
+    """min and max of |sin z| over [lo, hi] (hi - lo < pi)."""
+    ends = np.abs(np.sin(np.stack([lo, hi])))
+    mn, mx = ends.min(axis=0), ends.max(axis=0)
+    k0 = np.ceil(lo / np.pi) <= np.floor(hi / np.pi)                     # a multiple of pi
+    k1 = np.ceil(lo / np.pi - 0.5) <= np.floor(hi / np.pi - 0.5)         # pi/2 + k pi
+    return np.where(k0, 0.0, mn), np.where(k1, 1.0, mx)
+
+
+def rotation_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
+                    prop_bits=12):
+    """Per-row bounds on |RTL - rotation_float| in LSBs of the angle, by interval arithmetic.
+
+    Every intermediate value of the datapath is carried as an interval that must hold the
+    RTL's value: a table output lies within the table's measured error (``Lut.max_error``,
+    over the whole bin) of the function on the interval of its input, and asin, atan and
+    Tprop are monotone; products of non-negative intervals multiply their ends; theta' is
+    monotone in |Z| and in theta_prop, so its extremes are at the corners. The bound is the
+    distance from the float model to the far end of the interval, plus half an LSB for
+    theta's rounding. Where the sign of Z or of the numerator is not determined, phi' may lie
+    in any quadrant those signs allow; next to N (where phi' is meaningless) that is any
+    angle, and the bound is half a turn.
+    """
+    from hdl.rotation_unit.rotation import (ATAN_EXP_LO, PROP_FRAC, asin_lut, atan_lut,
+                                            prop_lut, recip_sin_lut)
+    from hdl.lut import quarter_cos_lut
+    lsb = 2 * np.pi / 2**angle_bits
+    a = {k: turns(v, angle_bits) for k, v in inp.items()}
+    d = a["phi_a"] - a["phi_n"]
+    x, y = a["theta_a"] + d, a["theta_a"] - d
+    eps = quarter_cos_lut(trig_bits, 1 << (angle_bits - 2)).max_error * 2.0**-trig_bits
+    s = (np.sin(x) + np.sin(y)) / 2
+    num = (np.cos(y) - np.cos(x)) / 2
+    e_asin = asin_lut(asin_bits, angle_bits).max_error * lsb
+    thx_lo = np.arcsin(np.clip(s - eps, -1, 1)) - e_asin
+    thx_hi = np.arcsin(np.clip(s + eps, -1, 1)) + e_asin
+    z_mid = np.angle(np.exp(1j * ((thx_lo + thx_hi) / 2 - a["theta_n"])))
+    half_w = (thx_hi - thx_lo) / 2
+    z_lo, z_hi = z_mid - half_w, z_mid + half_w
+    az_lo = np.where((z_lo <= 0) & (z_hi >= 0), 0.0, np.minimum(np.abs(z_lo), np.abs(z_hi)))
+    az_hi = np.minimum(np.maximum(np.abs(z_lo), np.abs(z_hi)), np.pi)
+    recip = recip_sin_lut(angle_bits)
+    r_top, e_r = recip.contents[0] * 2.0**-recip.fmt.frac_bits, recip.max_error * recip.fmt.lsb
+
+    def recip_range(mn, mx):
+        return (1 / (2 * np.maximum(mx, 1e-300)) - e_r,
+                np.minimum(1 / (2 * np.maximum(mn, 1e-300)), r_top) + e_r)
+
+    rs_lo, rs_hi = recip_range(*_range_abs_sin(z_lo, z_hi))
+    rc_lo, rc_hi = recip_range(*_range_abs_sin(z_lo + np.pi / 2, z_hi + np.pi / 2))
+    n_lo, n_hi = 2 * num - 2 * eps, 2 * num + 2 * eps                  # n2 = cos Y - cos X
+    an_lo = np.where((n_lo <= 0) & (n_hi >= 0), 0.0, np.minimum(np.abs(n_lo), np.abs(n_hi)))
+    an_hi = np.maximum(np.abs(n_lo), np.abs(n_hi))
+    # phi': atan of |n2| / (2 |sin Z|) (floating-point addressed, saturating at the top)
+    e_atan = atan_lut(atan_bits, angle_bits).max_error * lsb
+    r_lo, r_hi = an_lo * np.maximum(rs_lo, 0), an_hi * rs_hi
+    r_max = 2.0 ** (angle_bits - 2)
+    pm_lo = np.arctan(np.minimum(r_lo, r_max * (1 - 2.0**-atan_bits))) - e_atan
+    pm_hi = np.arctan(r_hi) + e_atan
+    want = rotation_float(inp, angle_bits)
+    phi_model = want["phi"] * lsb
+    # every quadrant the signs of Z and of the numerator allow gives an arc of phi'; the
+    # bound is the farthest point of any of them from the model (half a turn if one holds
+    # the model's antipode)
+    far = np.zeros_like(phi_model)
+    for z_neg in (False, True):
+        for n_neg in (False, True):
+            # the RTL wraps Z into [-180, 180): values past either end change sign
+            possible = (((z_lo < 0) & (z_hi >= -np.pi)) | (z_hi >= np.pi) if z_neg else
+                        ((z_hi >= 0) & (z_lo < np.pi)) | (z_lo < -np.pi))
+            possible &= ((n_hi < 0) if n_neg else (n_lo >= 0)) | ((n_lo < 0) & (n_hi >= 0))
+            b_lo, b_hi = (np.pi - pm_hi, np.pi - pm_lo) if z_neg else (pm_lo, pm_hi)
+            lo, hi = (-b_hi, -b_lo) if n_neg else (b_lo, b_hi)
+            d_lo = np.abs(np.angle(np.exp(1j * (lo - phi_model))))
+            d_hi = np.abs(np.angle(np.exp(1j * (hi - phi_model))))
+            holds_antipode = np.mod(phi_model + np.pi - lo, 2 * np.pi) <= hi - lo
+            arc = np.where(holds_antipode, np.pi, np.maximum(d_lo, d_hi))
+            far = np.where(possible, np.maximum(far, arc), far)
+    phi_bound = far / lsb
+    # theta': |Z| + (90 - |Z|) Tprop(min(|n2| / (2 |cos Z|), 1))
+    e_prop = prop_lut(prop_bits).max_error * 2.0**-PROP_FRAC
+    yk_lo, yk_hi = np.minimum(an_lo * np.maximum(rc_lo, 0), 1), np.minimum(an_hi * rc_hi, 1)
+    tprop = lambda v: 1 - np.arccos(v) / (np.pi / 2)                          # noqa: E731
+    p_lo, p_hi = tprop(yk_lo) - e_prop, tprop(yk_hi) + e_prop
+    corners = np.stack([az + (np.pi / 2 - az) * pr for az in (az_lo, az_hi)
+                        for pr in (p_lo, p_hi)])
+    theta_model = want["theta"] * lsb
+    theta_bound = np.maximum(corners.max(axis=0) - theta_model,
+                             theta_model - corners.min(axis=0)) / lsb + 0.5
+    return {"phi": phi_bound, "theta": theta_bound}

@@ -9,7 +9,7 @@ import functools
 import operator
 
 import numpy as np
-from amaranth.hdl import Value
+from amaranth.hdl import Mux, Value
 from amaranth.lib.memory import Memory
 
 from .fixed import Fixed
@@ -43,7 +43,7 @@ class Lut:
         return np.clip(a, 0, self.depth - 1).astype(np.int64)
 
 
-def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, oversample=65):
+def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, edges=None, oversample=65):
     """Tabulate ``fn`` (a vectorised numpy function) into ``2**addr_bits`` entries of ``fmt``.
 
     ``fn`` returns values in the format's unit (the builder scales by ``2**fmt.frac_bits``).
@@ -51,6 +51,8 @@ def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, oversample=65):
     address ``a`` stands for ``x`` in ``[lo + a*step, lo + (a+1)*step)`` and holds ``fn`` at the
     bin's centre; the error is then measured on ``oversample`` points across each bin.
     ``depth`` overrides ``2**addr_bits`` (a quarter-wave table with both end points, say).
+    ``edges`` (``depth + 1`` increasing values) gives each address its own bin
+    ``[edges[a], edges[a+1])``, for non-uniform addressing (``float_bins``).
     Entries outside ``fmt`` are an error, never saturated.
     """
     addr_bits = operator.index(addr_bits)
@@ -62,8 +64,18 @@ def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, oversample=65):
     if not 1 <= depth <= 1 << addr_bits:
         raise ValueError(f"LUT depth {depth} does not fit {addr_bits} address bits")
     scale = 2.0 ** fmt.frac_bits
+    if edges is not None:
+        edges = np.asarray(edges, float)
+        depth = len(edges) - 1
+        if depth > 1 << addr_bits or not np.all(np.diff(edges) > 0):
+            raise ValueError("LUT edges must increase and fit the address width")
     a = np.arange(depth)
-    if domain is None:
+    if edges is not None:
+        x_entry = (edges[:-1] + edges[1:]) / 2
+        x_check = edges[:-1, None] + np.linspace(0.0, 1.0, oversample)[None, :] \
+            * np.diff(edges)[:, None]
+        lo, hi = edges[0], edges[-1]
+    elif domain is None:
         x_entry = a.astype(float)
         x_check = x_entry[:, None]
     else:
@@ -81,7 +93,8 @@ def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, oversample=65):
         raise ValueError(f"LUT entries {contents.min()}..{contents.max()} do not fit "
                          f"{'s' if fmt.signed else 'u'}{fmt.width}")
     err = np.abs(np.asarray(fn(x_check), dtype=float) * scale - contents[:, None])
-    return Lut(contents, fmt, float(err.max()), None if domain is None else (lo, hi))
+    return Lut(contents, fmt, float(err.max()),
+               None if domain is None and edges is None else (lo, hi))
 
 
 def rom(m, lut, addr, name):
@@ -95,6 +108,33 @@ def rom(m, lut, addr, name):
     port = mem.read_port(domain="comb")
     m.d.comb += port.addr.eq(addr)
     return Value.cast(port.data)
+
+
+def float_bins(exp_lo, exp_hi, mant_bits):
+    """Bin edges of a floating-point address over [0, 2**exp_hi): ``2**mant_bits`` uniform bins
+    below ``2**-exp_lo``, then ``2**mant_bits`` per octave up to ``2**exp_hi``
+    (``float_address`` computes the address in hardware)."""
+    m = 1 << mant_bits
+    below = np.arange(m) * 2.0 ** -exp_lo / m
+    octaves = [2.0 ** e * (1 + np.arange(m) / m) for e in range(-exp_lo, exp_hi)]
+    return np.concatenate([below, *octaves, [2.0 ** exp_hi]])
+
+
+def float_address(value, frac_bits, exp_lo, exp_hi, mant_bits):
+    """The address of ``float_bins`` for an unsigned fixed-point ``value`` (``frac_bits``
+    fraction bits): a leading-one search and a shift; values past the top saturate."""
+    width = len(Value.cast(value))
+    m = 1 << mant_bits
+    top = (exp_lo + exp_hi + 1) * m - 1
+    base = frac_bits - exp_lo                       # bit position of 2**-exp_lo
+    if base < mant_bits:
+        raise ValueError("float_address needs at least mant_bits bits below 2**-exp_lo")
+    addr = (value >> (base - mant_bits))[:mant_bits]                      # below 2**-exp_lo
+    for pos in range(base, width):                                         # leading one
+        seg = pos - base + 1
+        here = top if seg > exp_lo + exp_hi else seg * m + (value >> (pos - mant_bits))[:mant_bits]
+        addr = Mux(value[pos], here, addr)
+    return addr
 
 
 @functools.lru_cache(maxsize=None)

@@ -15,7 +15,10 @@ CONFIGS = [("texel_decode", {}), ("fenney_power", {}), ("fenney_dot", {}),
            ("fenney_dot", {"normalize": True}), ("fenney_xz", {}),
            ("fenney_xz", {"normalize": True}), ("fenney_polar", {}),
            ("illum", {}),
-           ("illum", {"angle_bits": 8, "trig_bits": 10, "table_bits": 8, "shininess": 64})]
+           ("illum", {"angle_bits": 8, "trig_bits": 10, "table_bits": 8, "shininess": 64}),
+           ("rotation", {}),
+           ("rotation", {"angle_bits": 10, "trig_bits": 12, "asin_bits": 10, "atan_bits": 6,
+                         "prop_bits": 10})]
 
 
 def test_every_unit_is_covered():

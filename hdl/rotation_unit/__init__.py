@@ -1,1 +1,4 @@
-"""Angular vector rotation (seed 003 §3.1): not built yet; see the angular bump-mapping issue."""
+"""Angular vector rotation (seed 003 §3.1, Fig 7)."""
+from .rotation import Rotation
+
+__all__ = ["Rotation"]

@@ -1,0 +1,148 @@
+"""The angular vector rotation of seed 003 (§3.1, eq 5-27, Fig 7), the published method.
+
+A = (phi_A, theta_A) into the frame where N = (phi_N, theta_N) is the z axis, with
+D = phi_A - phi_N, X = theta_A + D, Y = theta_A - D::
+
+    theta_x = asin((sin X + sin Y) / 2)            (eq 5-7)
+    Z       = theta_x - theta_N
+    phi'    = atan((cos Y - cos X) / (2 sin Z))    (eq 8-9)
+    yk      = (cos Y - cos X) / (2 cos Z)          (eq 27)
+    theta'  = Z + (90 - Z) (1 - acos(yk) / 90)     (eq 19, 21; the bracket is table Tprop)
+
+Datapath (7 stages, one vector per clock): four sin/cos look-ups (one quarter-wave table
+generator, folded); an adder and a subtractor; an asin table; Z and its folds; two reciprocal
+tables, 1/(2 sin) and 1/(2 cos), in one generator ("the reciprocal folded into them"); the two
+ratio multipliers; an atan table with a floating-point address (the ratio is unbounded) and
+the Tprop table; the proportion multiplier. Three multipliers in all, as Fig 7.
+
+The decisions for the cases the paper leaves open are golden.angular.rotate_paper's: Z wrapped
+into (-180, 180] deg, phi' by quadrant from the signs of Z and of the numerator (atan2),
+theta' from |Z|, |yk| clamped to 1, and 1/(2 sin 0) saturated at the table's first entry,
+1/(2 sin(half an angle step)).
+
+Formats: every angle u``angle_bits`` in turns. Bounds against the float model:
+golden.angular.rotation_bounds, by interval arithmetic over every table's measured error.
+"""
+import functools
+
+import numpy as np
+from amaranth.hdl import Mux
+
+from ..fixed import Field, Fixed, u
+from ..lut import build_lut, float_address, float_bins, quarter_cos_lut, rom
+from ..trig import cos_lookup, signed_cos
+from ..unit import Unit, check_int
+
+RECIP_FRAC = 16          # 1/(2 sin a) and 1/(2 cos a): 16 fraction bits
+PROP_FRAC = 16           # theta_prop: 1.0 = 2**16
+ATAN_EXP_LO = 8          # the atan table's address: 2**-8 .. 2**(angle_bits - 2) in octaves
+
+
+@functools.lru_cache(maxsize=None)
+def asin_lut(addr_bits, angle_bits):
+    """asin(x) in turns * 2**angle_bits for x in [0, 1]."""
+    return build_lut(lambda x: np.arcsin(np.clip(x, 0, 1)) / (2 * np.pi), addr_bits,
+                     Fixed(angle_bits - 1, False, angle_bits, "turn"), domain=(0.0, 1.0))
+
+
+@functools.lru_cache(maxsize=None)
+def recip_sin_lut(angle_bits):
+    """1 / (2 sin a) for a = 0..90 deg in angle steps; a = 0 holds the value at half a step."""
+    step = 2 * np.pi / 2**angle_bits
+    top = 1 / (2 * np.sin(step / 2))
+    width = int(np.ceil(np.log2(top))) + 1 + RECIP_FRAC
+    return build_lut(lambda a: 1 / (2 * np.sin(np.maximum(a, 0.5) * step)), angle_bits - 1,
+                     u(width, RECIP_FRAC), depth=2**(angle_bits - 2) + 1)
+
+
+@functools.lru_cache(maxsize=None)
+def atan_lut(mant_bits, angle_bits):
+    """atan(r) in turns * 2**angle_bits over r in [0, 2**(angle_bits-2)), float-addressed."""
+    edges = float_bins(ATAN_EXP_LO, angle_bits - 2, mant_bits)
+    return build_lut(lambda r: np.arctan(r) / (2 * np.pi), int(np.ceil(np.log2(len(edges) - 1))),
+                     Fixed(angle_bits - 1, False, angle_bits, "turn"), edges=edges)
+
+
+@functools.lru_cache(maxsize=None)
+def prop_lut(addr_bits):
+    """Tprop(yk) = 1 - acos(yk) / 90 deg for yk in [0, 1] (eq 21, 26)."""
+    return build_lut(lambda y: 1 - np.arccos(np.clip(y, 0, 1)) / (np.pi / 2), addr_bits,
+                     u(PROP_FRAC + 1, PROP_FRAC), domain=(0.0, 1.0))
+
+
+class Rotation(Unit):
+    """Seed 003's vector rotation, one vector per clock, latency 7, three multipliers."""
+    NAME = "rotation"
+    DOC = "Angular vector rotation, the published method (seed 003 §3.1, Fig 7)"
+    PARAMS = {"angle_bits": 12, "trig_bits": 14, "asin_bits": 12, "atan_bits": 8,
+              "prop_bits": 12}
+    latency = 7
+
+    def validate(self, angle_bits, trig_bits, asin_bits, atan_bits, prop_bits):
+        check_int("angle_bits", angle_bits, 6, 16)
+        check_int("trig_bits", trig_bits, 8, 16)
+        check_int("asin_bits", asin_bits, 4, min(trig_bits + 1, 16))
+        check_int("atan_bits", atan_bits, 2, 10)
+        check_int("prop_bits", prop_bits, 4, 16)
+
+    def angle(self, name):
+        return Field(name, u(self.params["angle_bits"], self.params["angle_bits"], "turn"))
+
+    @property
+    def inputs(self):
+        return tuple(self.angle(n) for n in ("phi_n", "theta_n", "phi_a", "theta_a"))
+
+    @property
+    def outputs(self):
+        return (self.angle("phi"), self.angle("theta"))
+
+    @property
+    def tables(self):
+        n, p = self.params["angle_bits"], self.params
+        return {"trig": quarter_cos_lut(p["trig_bits"], 1 << (n - 2)),
+                "asin": asin_lut(p["asin_bits"], n), "recip": recip_sin_lut(n),
+                "atan": atan_lut(p["atan_bits"], n), "prop": prop_lut(p["prop_bits"])}
+
+    def datapath(self, p, v):
+        n, t = self.params["angle_bits"], self.params["trig_bits"]
+        quarter, half = 1 << (n - 2), 1 << (n - 1)
+        tab = self.tables
+        v = dict(v)
+        p_n, t_a, p_a = v.pop("phi_n"), v.pop("theta_a"), v.pop("phi_a")
+        d = p_a - p_n
+        angles = {"sx": t_a + d - quarter, "sy": t_a - d - quarter,      # sin = cos(a - 90)
+                  "cx": t_a + d, "cy": t_a - d}
+        reads = {}
+        for key, a in angles.items():
+            reads[key], reads[key + "_neg"] = cos_lookup(p.m, tab["trig"], a, n, key)
+        v = p.stage({**v, **reads})                                       # 4 look-ups
+        sx, sy, cx, cy = (signed_cos(v.pop(k), v.pop(k + "_neg")) for k in ("sx", "sy", "cx", "cy"))
+        v = p.stage({**v, "s2": sx + sy, "n2": cy - cx})                  # 2 sin(thx), 2 num
+        s2, n2 = v.pop("s2"), v.pop("n2")
+        top = (1 << self.params["asin_bits"]) - 1
+        addr = abs(s2) >> (t + 1 - self.params["asin_bits"])
+        v = p.stage({**v, "thx": rom(p.m, tab["asin"], Mux(addr > top, top, addr), "asin"),
+                     "s_neg": s2 < 0, "n_neg": n2 < 0, "n_abs": abs(n2)})
+        thx = Mux(v.pop("s_neg"), -v["thx"], v.pop("thx"))
+        z = (thx - v.pop("theta_n"))[:n].as_signed()                     # Z in (-180, 180]
+        az = abs(z)
+        fold_s = Mux(az > quarter, half - az, az)                         # |sin Z| = sin fold_s
+        fold_c = Mux(az > quarter, az - quarter, quarter - az)            # |cos Z| = sin fold_c
+        v = p.stage({**v, "az": az, "z_neg": z < 0,
+                     "rs": rom(p.m, tab["recip"], fold_s, "recip_sin"),
+                     "rc": rom(p.m, tab["recip"], fold_c, "recip_cos")})
+        frac = t + RECIP_FRAC
+        n_abs = v.pop("n_abs")
+        v = p.stage({**v, "ratio": n_abs * v.pop("rs"), "yk": n_abs * v.pop("rc")})
+        ratio, yk = v.pop("ratio"), v.pop("yk")
+        ptop = (1 << self.params["prop_bits"]) - 1
+        paddr = yk >> (frac - self.params["prop_bits"])
+        v = p.stage({**v,
+                     "pm": rom(p.m, tab["atan"], float_address(
+                         ratio, frac, ATAN_EXP_LO, n - 2, self.params["atan_bits"]), "atan"),
+                     "prop": rom(p.m, tab["prop"], Mux(paddr > ptop, ptop, paddr), "prop")})
+        az, pm = v.pop("az"), v.pop("pm")
+        theta = az + (((quarter - az) * v.pop("prop") + (1 << (PROP_FRAC - 1))) >> PROP_FRAC)
+        base = Mux(v.pop("z_neg"), half - pm, pm)
+        phi = Mux(v.pop("n_neg"), -base, base)
+        return p.stage({**v, "phi": phi[:n], "theta": theta[:n]})

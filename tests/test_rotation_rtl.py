@@ -1,0 +1,85 @@
+"""The rotation unit: its interval bound is not vacuous, the exact cases, hard cases on every
+simulator, a property search for rows that break the bound, and its multiplier count."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from golden import MODELS, angular
+from sim.report import count
+
+from .conftest import assert_golden, per_simulator, stream
+
+BITS = 12
+FULL, HALF, QUARTER = 1 << BITS, 1 << (BITS - 1), 1 << (BITS - 2)
+
+
+def random_hemisphere_rows(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return {"phi_n": rng.integers(0, FULL, n), "theta_n": rng.integers(0, QUARTER + 1, n),
+            "phi_a": rng.integers(0, FULL, n), "theta_a": rng.integers(0, QUARTER + 1, n)}
+
+
+def test_the_bound_constrains():
+    """The interval bound leaves phi' free only next to N (where it is meaningless), and is
+    a few LSB elsewhere: it would catch a wrong RTL."""
+    rows = random_hemisphere_rows(20_000)
+    b = angular.rotation_bounds(rows)
+    free = b["phi"] >= HALF / 2
+    assert free.mean() < 0.01
+    sep = np.degrees(np.arccos(np.clip(
+        (angular.to_vector(*(angular.turns(rows[k], BITS) for k in ("phi_n", "theta_n")))
+         * angular.to_vector(*(angular.turns(rows[k], BITS) for k in ("phi_a", "theta_a"))))
+        .sum(-1), -1, 1)))
+    assert sep[free].max() < 10                        # free only within 10 deg of N
+    assert np.median(b["phi"]) < 10 and np.median(b["theta"]) < 25
+    assert b["theta"].max() < 100
+
+
+# The cases the paper leaves open and those where it is exact (D = 0, 180 deg; theta_A = 0),
+# as (phi_n, theta_n, phi_a, theta_a) in degrees.
+HARD = [(0, 0, 37, 20), (123, 0, 200, 45),       # theta_N = 0, any phi_N
+        (30, 40, 70, 0),                           # theta_A = 0
+        (10, 30, 10, 60), (10, 60, 190, 20),       # D = 0 and 180 deg: exact
+        (350, 30, 5, 30),                          # phi wrapping at 0/360
+        (0, 30, 0, 30),                            # A = N: sin Z = 0, num = 0
+        (0, 45, 90, 45), (0, 90, 90, 90),          # cos Z -> 0, |yk| >= 1
+        (0, 0, 0, 90), (0, 90, 0, 0),              # asin at +-1
+        (0, 80, 180, 80),                          # below the horizon, theta sum past 180
+        (0, 180, 180, 180)]                        # both at -z: Z wraps at 180 deg
+
+
+def hard_inputs():
+    raw = np.rint(np.array(HARD, float) * FULL / 360).astype(np.int64)
+    raw[:, [0, 2]] %= FULL                         # phi wraps; theta = 180 deg is HALF
+    return dict(zip(("phi_n", "theta_n", "phi_a", "theta_a"), raw.T))
+
+
+@pytest.mark.parametrize("simulator,name", list(per_simulator(["rotation"])))
+def test_hard_cases(simulator, name):
+    inputs = hard_inputs()
+    out, _ = stream(name, inputs, simulator)
+    assert_golden(name, inputs, out)
+    exact = [2, 3, 4]                                 # rows where the method is exact
+    a = {k: angular.turns(v, BITS) for k, v in inputs.items()}
+    ex_phi, ex_theta = angular.rotate_exact(a["phi_n"], a["theta_n"], a["phi_a"], a["theta_a"])
+    lsb = 2 * np.pi / FULL
+    bound = angular.rotation_bounds(inputs)["theta"]
+    assert np.all(np.abs(out["theta"][exact] - ex_theta[exact] / lsb) <= bound[exact])
+    assert out["theta"][6] <= bound[6]                # A = N: theta' = 0 within the bound
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, FULL - 1), st.integers(0, HALF),
+                          st.integers(0, FULL - 1), st.integers(0, HALF)),
+                min_size=1, max_size=40))
+def test_property_rows_stay_within_the_bound(rows):
+    inputs = {k: np.array(c) for k, c in zip(("phi_n", "theta_n", "phi_a", "theta_a"),
+                                             zip(*rows))}
+    out, _ = stream("rotation", inputs, "amaranth")
+    assert_golden("rotation", inputs, out)
+
+
+def test_three_multipliers(tmp_path):
+    """Fig 7: three multipliers (the two ratios and the proportion)."""
+    c = count("rotation", work=tmp_path)
+    assert c["mul"] <= 3 and c["const_mul"] == 0
