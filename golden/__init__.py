@@ -269,6 +269,29 @@ def _rotation_vectors(rng, n, angle_bits=12, **_):
     return _cat(hard, {"phi_n": pn, "theta_n": tn, "phi_a": pa, "theta_a": ta})
 
 
+# ---- bump_polar (seed 003) -------------------------------------------------------------------
+
+def _bump_run(inp, **params):
+    return angular.bump_polar_float(inp, **params)
+
+
+def _bump_check(inp, out, **params):
+    want = angular.bump_polar_float(inp, **params)
+    bounds = angular.bump_polar_bounds(inp, **params)
+    return {k: (np.abs(np.asarray(out[k], float) - want[k]), bounds[k]) for k in want}
+
+
+def _bump_vectors(rng, n, angle_bits=12, **_):
+    n = 20_000 if n is None else n
+    full, quarter = 1 << angle_bits, 1 << (angle_bits - 2)
+    rot = _rotation_vectors(rng, n, angle_bits)               # N and L: the rotation's cases
+    m = len(rot["phi_n"])
+    return {"phi_n": rot["phi_n"], "theta_n": rot["theta_n"], "phi_l": rot["phi_a"],
+            "theta_l": rot["theta_a"], "phi_h": rng.integers(0, full, m),
+            "theta_h": rng.integers(0, quarter + 1, m), "phi_b": rng.integers(0, full, m),
+            "theta_b": rng.integers(0, quarter * 2 // 3 + 1, m)}      # bumps within 60 deg
+
+
 MODELS = {
     "texel_decode": Model(_texel_run, _texel_vectors, _exact_check(_texel_run), True),
     "fenney_power": Model(_power_run, _power_vectors, _exact_check(_power_run), True),
@@ -277,4 +300,5 @@ MODELS = {
     "fenney_polar": Model(_polar_run, _polar_vectors, _polar_check, False),
     "illum": Model(_illum_run, _illum_vectors, _illum_check, False),
     "rotation": Model(_rotation_run, _rotation_vectors, _rotation_check, False),
+    "bump_polar": Model(_bump_run, _bump_vectors, _bump_check, False),
 }

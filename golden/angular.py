@@ -253,3 +253,47 @@ def rotation_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
     theta_bound = np.maximum(corners.max(axis=0) - theta_model,
                              theta_model - corners.min(axis=0)) / lsb + 0.5
     return {"phi": phi_bound, "theta": theta_bound}
+
+
+# ---- bump_polar: two rotations and the illumination ------------------------------------------
+
+def _rotated(inp, vec, params):
+    keep = {k: params[k] for k in ("angle_bits", "trig_bits", "asin_bits", "atan_bits",
+                                   "prop_bits") if k in params}
+    rows = {"phi_n": inp["phi_n"], "theta_n": inp["theta_n"], "phi_a": inp[f"phi_{vec}"],
+            "theta_a": inp[f"theta_{vec}"]}
+    return rotation_float(rows, **keep), rotation_bounds(rows, **keep)
+
+
+def bump_polar_float(inp, **params):
+    """illum_float on the float rotations of L and H (real angles, not rounded to steps)."""
+    (l_rot, _), (h_rot, _) = _rotated(inp, "l", params), _rotated(inp, "h", params)
+    rows = {"phi_l": l_rot["phi"], "theta_l": l_rot["theta"], "phi_h": h_rot["phi"],
+            "theta_h": h_rot["theta"], "phi_n": inp["phi_b"], "theta_n": inp["theta_b"]}
+    keep = {k: params[k] for k in ("angle_bits", "trig_bits", "table_bits", "shininess")
+            if k in params}
+    return illum_float(rows, **keep)
+
+
+def bump_polar_bounds(inp, **params):
+    """The illumination's bounds, plus what the rotations' errors do to the inner products.
+
+    A rotated vector off by d_theta and d_phi (the rotation bounds, in radians) is off in
+    direction by at most d_theta + sin(theta' + d_theta) d_phi, and an inner product of unit
+    vectors changes by at most that angle. The diffuse table passes it on with slope 1, the
+    specular table with slope ``shininess``."""
+    bits = params.get("angle_bits", 12)
+    lsb = 2 * np.pi / 2**bits
+    keep = {k: params[k] for k in ("angle_bits", "trig_bits", "table_bits", "shininess")
+            if k in params}
+    base = illum_bounds(**keep)
+    out = {}
+    for vec, table, slope in (("l", "diffuse", 1), ("h", "specular",
+                                                   params.get("shininess", 16))):
+        rot, bound = _rotated(inp, vec, params)
+        d_theta, d_phi = bound["theta"] * lsb, bound["phi"] * lsb
+        reach = np.minimum(rot["theta"] * lsb + d_theta, np.pi / 2)
+        angle = np.minimum(d_theta + np.sin(reach) * d_phi, np.pi)
+        out[f"dot_{vec}"] = base[f"dot_{vec}"] + angle * 2**15
+        out[table] = base[table] + slope * angle * 2**15
+    return out

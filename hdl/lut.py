@@ -97,16 +97,17 @@ def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, edges=None, oversa
                None if domain is None and edges is None else (lo, hi))
 
 
-def rom(m, lut, addr, name):
-    """Instantiate ``lut`` as a ROM with an asynchronous read port; returns the read data.
+def rom(p, lut, addr, name):
+    """Instantiate ``lut`` as a ROM in pipeline ``p``'s module, with an asynchronous read
+    port; returns the read data. ``name`` is made unique within the module.
 
     The caller registers the result in the next pipeline stage, so Yosys can merge the register
     into a block RAM.
     """
     mem = Memory(shape=lut.fmt.shape, depth=lut.depth, init=[int(v) for v in lut.contents])
-    m.submodules[name] = mem
+    p.m.submodules[p.unique(name)] = mem
     port = mem.read_port(domain="comb")
-    m.d.comb += port.addr.eq(addr)
+    p.m.d.comb += port.addr.eq(addr)
     return Value.cast(port.data)
 
 

@@ -9,7 +9,7 @@ from amaranth.hdl import Mux
 from .lut import rom
 
 
-def cos_lookup(m, lut, angle, bits, name):
+def cos_lookup(p, lut, angle, bits, name):
     """``(magnitude, negative)`` of cos(angle): an asynchronous ROM read and its sign bit."""
     steps = lut.depth - 1
     quarter = 1 << (bits - 2)
@@ -19,7 +19,7 @@ def cos_lookup(m, lut, angle, bits, name):
     half_angle = a[:bits - 1]                                  # a mod 180 deg
     fold = Mux(half_angle > quarter, (1 << (bits - 1)) - half_angle, half_angle)[:bits - 1]
     negative = (a > quarter) & (a < 3 * quarter)
-    return rom(m, lut, fold * (steps // quarter), name), negative
+    return rom(p, lut, fold * (steps // quarter), name), negative
 
 
 def signed_cos(magnitude, negative):

@@ -47,6 +47,7 @@ class Pipeline:
         self.en = Signal()
         self.stages = 0
         self._valid = i.valid
+        self._names = set()
         m.d.comb += [self.en.eq(~o.valid | o.ready), i.ready.eq(self.en)]
 
     def stage(self, v):
@@ -63,6 +64,15 @@ class Pipeline:
         with self.m.If(self.en):
             self.m.d.sync += valid.eq(self._valid)
         self._valid = valid
+        return out
+
+    def unique(self, name):
+        """``name``, or ``name_2``, ``name_3``... if a part used it already (composed units)."""
+        k, out = 1, name
+        while out in self._names:
+            k += 1
+            out = f"{name}_{k}"
+        self._names.add(out)
         return out
 
     @property

@@ -1,11 +1,12 @@
 """The registry of units: name -> component class. The CLI, the tests and the Verilog export
 all go through it, so a unit registered here is exported, linted, simulated and described."""
-from .illum_unit import FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, Illum, TexelDecode
+from .illum_unit import (BumpPolar, FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, Illum,
+                         TexelDecode)
 from .rotation_unit import Rotation
 from .unit import Unit
 
 UNITS = {cls.NAME: cls for cls in (TexelDecode, FenneyPower, FenneyDot, FenneyXZ, FenneyPolar,
-                                   Illum, Rotation)}
+                                   Illum, Rotation, BumpPolar)}
 
 
 class ParamError(ValueError):

@@ -90,7 +90,7 @@ def test_registry_json_contract():
             assert set(f) == {"name", "width", "signed", "frac_bits", "unit"}
     names = {u["name"] for u in units}
     assert names == {"texel_decode", "fenney_power", "fenney_dot", "fenney_xz", "fenney_polar",
-                     "illum", "rotation"}
+                     "illum", "rotation", "bump_polar"}
     dot = next(u for u in units if u["name"] == "fenney_dot")
     assert dot["params"] == {"normalize": False, "rsqrt_bits": 12}
     assert [f["name"] for f in dot["inputs"]] == ["x", "y", "z", "lx", "ly", "lz", "h"]

@@ -18,7 +18,8 @@ CONFIGS = [("texel_decode", {}), ("fenney_power", {}), ("fenney_dot", {}),
            ("illum", {"angle_bits": 8, "trig_bits": 10, "table_bits": 8, "shininess": 64}),
            ("rotation", {}),
            ("rotation", {"angle_bits": 10, "trig_bits": 12, "asin_bits": 10, "atan_bits": 6,
-                         "prop_bits": 10})]
+                         "prop_bits": 10}),
+           ("bump_polar", {})]
 
 
 def test_every_unit_is_covered():
@@ -45,3 +46,8 @@ def test_one_per_clock(simulator, name, params):
     assert info["latency"] == latency
     assert info["cycles"] == n + latency
     assert_golden(name, inputs, out, params)
+
+
+def test_bump_polar_latency_is_the_sum_of_its_parts():
+    bump = UNITS["bump_polar"].spec()
+    assert bump.latency == 2 * UNITS["rotation"].spec().latency + UNITS["illum"].spec().latency

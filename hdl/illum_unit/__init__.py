@@ -6,5 +6,6 @@ from .fenney_dot import FenneyDot
 from .fenney_xz import FenneyXZ
 from .fenney_polar import FenneyPolar
 from .illum import Illum
+from .bump_polar import BumpPolar
 
-__all__ = ["TexelDecode", "FenneyPower", "FenneyDot", "FenneyXZ", "FenneyPolar", "Illum"]
+__all__ = ["TexelDecode", "FenneyPower", "FenneyDot", "FenneyXZ", "FenneyPolar", "Illum", "BumpPolar"]

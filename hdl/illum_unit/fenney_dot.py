@@ -82,7 +82,7 @@ class FenneyDot(Unit):
             big = n2 >= 65536
             n2_16 = Mux(big, n2 >> 2, n2)[:16]
             addr = n2_16 >> (16 - self.params["rsqrt_bits"])
-            v = p.stage({**v, "g": rom(p.m, self.lut, addr, "rsqrt"), "big": big})
+            v = p.stage({**v, "g": rom(p, self.lut, addr, "rsqrt"), "big": big})
             g, big = v.pop("g"), v.pop("big")
             prod = v.pop("dot") * g
             dq = Mux(big, (prod + (1 << 15)) >> 16, (prod + (1 << 14)) >> 15)

@@ -55,10 +55,10 @@ class FenneyPolar(Unit):
         v = dict(v)
         s, r, q = v.pop("s"), v.pop("r"), v.pop("q")
         lut = self.lut
-        cos_d, neg = cos_lookup(p.m, lut, r - q, 8, "cos_d")      # subtractor 16, unit 18
+        cos_d, neg = cos_lookup(p, lut, r - q, 8, "cos_d")      # subtractor 16, unit 18
         v = p.stage({**v,
-                     "sin_s": rom(p.m, lut, 256 - s, "sin_s"),     # sin S = cos(90 - S)
-                     "cos_s": rom(p.m, lut, s, "cos_s"),
+                     "sin_s": rom(p, lut, 256 - s, "sin_s"),     # sin S = cos(90 - S)
+                     "cos_s": rom(p, lut, s, "cos_s"),
                      "cos_d": cos_d, "neg": neg})                  # sign bit 26
         k2, k3 = v.pop("k2"), v.pop("k3")
         v = p.stage({**v, "m12": k2 * v.pop("sin_s"), "m14": k3 * v.pop("cos_s")})

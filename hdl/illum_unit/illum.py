@@ -73,7 +73,7 @@ class Illum(Unit):
         for a in ("l", "h"):
             p_a, t_a = v.pop(f"phi_{a}"), v.pop(f"theta_{a}")
             for key, angle in (("cm", t_a - t_n), ("cp", t_a + t_n), ("cf", p_a - p_n)):
-                mag, neg = cos_lookup(p.m, self.cos_lut, angle, bits, f"{key}_{a}")
+                mag, neg = cos_lookup(p, self.cos_lut, angle, bits, f"{key}_{a}")
                 reads[f"{key}_{a}"], reads[f"{key}_{a}_neg"] = mag, neg
         v = p.stage({**v, **reads})                                   # six cosine look-ups
         for a in ("l", "h"):
@@ -95,5 +95,5 @@ class Illum(Unit):
         addr = {a: Mux(v[f"dot_{a}"] >> (OUT_FRAC - self.params["table_bits"]) > top, top,
                        v[f"dot_{a}"] >> (OUT_FRAC - self.params["table_bits"]))
                 for a in ("l", "h")}
-        return p.stage({**v, "diffuse": rom(p.m, diffuse, addr["l"], "diffuse"),
-                        "specular": rom(p.m, specular, addr["h"], "specular")})
+        return p.stage({**v, "diffuse": rom(p, diffuse, addr["l"], "diffuse"),
+                        "specular": rom(p, specular, addr["h"], "specular")})

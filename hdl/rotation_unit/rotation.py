@@ -114,14 +114,14 @@ class Rotation(Unit):
                   "cx": t_a + d, "cy": t_a - d}
         reads = {}
         for key, a in angles.items():
-            reads[key], reads[key + "_neg"] = cos_lookup(p.m, tab["trig"], a, n, key)
+            reads[key], reads[key + "_neg"] = cos_lookup(p, tab["trig"], a, n, key)
         v = p.stage({**v, **reads})                                       # 4 look-ups
         sx, sy, cx, cy = (signed_cos(v.pop(k), v.pop(k + "_neg")) for k in ("sx", "sy", "cx", "cy"))
         v = p.stage({**v, "s2": sx + sy, "n2": cy - cx})                  # 2 sin(thx), 2 num
         s2, n2 = v.pop("s2"), v.pop("n2")
         top = (1 << self.params["asin_bits"]) - 1
         addr = abs(s2) >> (t + 1 - self.params["asin_bits"])
-        v = p.stage({**v, "thx": rom(p.m, tab["asin"], Mux(addr > top, top, addr), "asin"),
+        v = p.stage({**v, "thx": rom(p, tab["asin"], Mux(addr > top, top, addr), "asin"),
                      "s_neg": s2 < 0, "n_neg": n2 < 0, "n_abs": abs(n2)})
         thx = Mux(v.pop("s_neg"), -v["thx"], v.pop("thx"))
         z = (thx - v.pop("theta_n"))[:n].as_signed()                     # Z in (-180, 180]
@@ -129,8 +129,8 @@ class Rotation(Unit):
         fold_s = Mux(az > quarter, half - az, az)                         # |sin Z| = sin fold_s
         fold_c = Mux(az > quarter, az - quarter, quarter - az)            # |cos Z| = sin fold_c
         v = p.stage({**v, "az": az, "z_neg": z < 0,
-                     "rs": rom(p.m, tab["recip"], fold_s, "recip_sin"),
-                     "rc": rom(p.m, tab["recip"], fold_c, "recip_cos")})
+                     "rs": rom(p, tab["recip"], fold_s, "recip_sin"),
+                     "rc": rom(p, tab["recip"], fold_c, "recip_cos")})
         frac = t + RECIP_FRAC
         n_abs = v.pop("n_abs")
         v = p.stage({**v, "ratio": n_abs * v.pop("rs"), "yk": n_abs * v.pop("rc")})
@@ -138,9 +138,9 @@ class Rotation(Unit):
         ptop = (1 << self.params["prop_bits"]) - 1
         paddr = yk >> (frac - self.params["prop_bits"])
         v = p.stage({**v,
-                     "pm": rom(p.m, tab["atan"], float_address(
+                     "pm": rom(p, tab["atan"], float_address(
                          ratio, frac, ATAN_EXP_LO, n - 2, self.params["atan_bits"]), "atan"),
-                     "prop": rom(p.m, tab["prop"], Mux(paddr > ptop, ptop, paddr), "prop")})
+                     "prop": rom(p, tab["prop"], Mux(paddr > ptop, ptop, paddr), "prop")})
         az, pm = v.pop("az"), v.pop("pm")
         theta = az + (((quarter - az) * v.pop("prop") + (1 << (PROP_FRAC - 1))) >> PROP_FRAC)
         base = Mux(v.pop("z_neg"), half - pm, pm)
