@@ -155,10 +155,12 @@ def illum_bounds(angle_bits=10, trig_bits=14, table_bits=10, shininess=16):
 
 # ---- the rotation unit's model and bounds (hdl/rotation_unit/rotation.py) --------------------
 
-def rotation_float(inp, angle_bits=12, **_):
-    """The published method on the inputs' binary angles; (phi', theta') in raw LSBs."""
+def rotation_float(inp, angle_bits=12, method="paper", **_):
+    """The published method (or the exact rotation) on the inputs' binary angles;
+    (phi', theta') in raw LSBs."""
     a = {k: turns(v, angle_bits) for k, v in inp.items()}
-    phi, theta = rotate_paper(a["phi_n"], a["theta_n"], a["phi_a"], a["theta_a"])
+    rotate = rotate_paper if method == "paper" else rotate_exact
+    phi, theta = rotate(a["phi_n"], a["theta_n"], a["phi_a"], a["theta_a"])
     scale = 2**angle_bits / (2 * np.pi)
     return {"phi": phi * scale, "theta": theta * scale}
 
@@ -172,13 +174,35 @@ def _range_abs_sin(lo, hi):
     return np.where(k0, 0.0, mn), np.where(k1, 1.0, mx)
 
 
-def rotation_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
+def _phi_arcs(phi_model, pm_lo, pm_hi, x_neg, x_pos, y_neg, y_pos):
+    """The farthest phi' the RTL can give from the model: every quadrant the possible signs
+    of x' and y' allow gives an arc of phi' from the interval [pm_lo, pm_hi] of its
+    first-quadrant magnitude (half a turn if an arc holds the model's antipode)."""
+    far = np.zeros_like(phi_model)
+    for xn, x_ok in ((False, x_pos), (True, x_neg)):
+        for yn, y_ok in ((False, y_pos), (True, y_neg)):
+            b_lo, b_hi = (np.pi - pm_hi, np.pi - pm_lo) if xn else (pm_lo, pm_hi)
+            lo, hi = (-b_hi, -b_lo) if yn else (b_lo, b_hi)
+            d_lo = np.abs(np.angle(np.exp(1j * (lo - phi_model))))
+            d_hi = np.abs(np.angle(np.exp(1j * (hi - phi_model))))
+            holds_antipode = np.mod(phi_model + np.pi - lo, 2 * np.pi) <= hi - lo
+            arc = np.where(holds_antipode, np.pi, np.maximum(d_lo, d_hi))
+            far = np.where(x_ok & y_ok, np.maximum(far, arc), far)
+    return far
+
+
+def rotation_bounds(inp, method="paper", **params):
+    """Per-row bounds on |RTL - rotation_float| in LSBs of the angle (see _paper_bounds)."""
+    return (_paper_bounds if method == "paper" else _exact_bounds)(inp, **params)
+
+
+def _paper_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
                     prop_bits=12):
     """Per-row bounds on |RTL - rotation_float| in LSBs of the angle, by interval arithmetic.
 
     Every intermediate value of the datapath is carried as an interval that must hold the
-    RTL's value: a table output lies within the table's measured error (``Lut.max_error``,
-    over the whole bin) of the function on the interval of its input, and asin, atan and
+    RTL's value: a table output lies within the measured error of the entries its input
+    interval can address (``Lut.error_over``, each over its whole bin) of the function, and asin, atan and
     Tprop are monotone; products of non-negative intervals multiply their ends; theta' is
     monotone in |Z| and in theta_prop, so its extremes are at the corners. The bound is the
     distance from the float model to the far end of the interval, plus half an LSB for
@@ -196,7 +220,7 @@ def rotation_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
     eps = quarter_cos_lut(trig_bits, 1 << (angle_bits - 2)).max_error * 2.0**-trig_bits
     s = (np.sin(x) + np.sin(y)) / 2
     num = (np.cos(y) - np.cos(x)) / 2
-    e_asin = asin_lut(asin_bits, angle_bits).max_error * lsb
+    e_asin = asin_lut(asin_bits, angle_bits).error_over(np.abs(s) - eps, np.abs(s) + eps) * lsb
     thx_lo = np.arcsin(np.clip(s - eps, -1, 1)) - e_asin
     thx_hi = np.arcsin(np.clip(s + eps, -1, 1)) + e_asin
     z_mid = np.angle(np.exp(1j * ((thx_lo + thx_hi) / 2 - a["theta_n"])))
@@ -207,8 +231,8 @@ def rotation_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
     recip = recip_sin_lut(angle_bits)
     r_top, e_r = recip.contents[0] * 2.0**-recip.fmt.frac_bits, recip.max_error * recip.fmt.lsb
 
-    def recip_range(mn, mx):
-        return (1 / (2 * np.maximum(mx, 1e-300)) - e_r,
+    def recip_range(mn, mx):          # the table saturates at its first entry, r_top
+        return (np.minimum(1 / (2 * np.maximum(mx, 1e-300)), r_top) - e_r,
                 np.minimum(1 / (2 * np.maximum(mn, 1e-300)), r_top) + e_r)
 
     rs_lo, rs_hi = recip_range(*_range_abs_sin(z_lo, z_hi))
@@ -217,34 +241,20 @@ def rotation_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
     an_lo = np.where((n_lo <= 0) & (n_hi >= 0), 0.0, np.minimum(np.abs(n_lo), np.abs(n_hi)))
     an_hi = np.maximum(np.abs(n_lo), np.abs(n_hi))
     # phi': atan of |n2| / (2 |sin Z|) (floating-point addressed, saturating at the top)
-    e_atan = atan_lut(atan_bits, angle_bits).max_error * lsb
     r_lo, r_hi = an_lo * np.maximum(rs_lo, 0), an_hi * rs_hi
+    e_atan = atan_lut(atan_bits, angle_bits).error_over(r_lo, r_hi) * lsb
     r_max = 2.0 ** (angle_bits - 2)
     pm_lo = np.arctan(np.minimum(r_lo, r_max * (1 - 2.0**-atan_bits))) - e_atan
     pm_hi = np.arctan(r_hi) + e_atan
     want = rotation_float(inp, angle_bits)
     phi_model = want["phi"] * lsb
-    # every quadrant the signs of Z and of the numerator allow gives an arc of phi'; the
-    # bound is the farthest point of any of them from the model (half a turn if one holds
-    # the model's antipode)
-    far = np.zeros_like(phi_model)
-    for z_neg in (False, True):
-        for n_neg in (False, True):
-            # the RTL wraps Z into [-180, 180): values past either end change sign
-            possible = (((z_lo < 0) & (z_hi >= -np.pi)) | (z_hi >= np.pi) if z_neg else
-                        ((z_hi >= 0) & (z_lo < np.pi)) | (z_lo < -np.pi))
-            possible &= ((n_hi < 0) if n_neg else (n_lo >= 0)) | ((n_lo < 0) & (n_hi >= 0))
-            b_lo, b_hi = (np.pi - pm_hi, np.pi - pm_lo) if z_neg else (pm_lo, pm_hi)
-            lo, hi = (-b_hi, -b_lo) if n_neg else (b_lo, b_hi)
-            d_lo = np.abs(np.angle(np.exp(1j * (lo - phi_model))))
-            d_hi = np.abs(np.angle(np.exp(1j * (hi - phi_model))))
-            holds_antipode = np.mod(phi_model + np.pi - lo, 2 * np.pi) <= hi - lo
-            arc = np.where(holds_antipode, np.pi, np.maximum(d_lo, d_hi))
-            far = np.where(possible, np.maximum(far, arc), far)
-    phi_bound = far / lsb
+    # the RTL wraps Z into [-180, 180): values past either end change sign
+    x_neg = ((z_lo < 0) & (z_hi >= -np.pi)) | (z_hi >= np.pi)
+    x_pos = ((z_hi >= 0) & (z_lo < np.pi)) | (z_lo < -np.pi)
+    phi_bound = _phi_arcs(phi_model, pm_lo, pm_hi, x_neg, x_pos, n_lo < 0, n_hi >= 0) / lsb
     # theta': |Z| + (90 - |Z|) Tprop(min(|n2| / (2 |cos Z|), 1))
-    e_prop = prop_lut(prop_bits).max_error * 2.0**-PROP_FRAC
     yk_lo, yk_hi = np.minimum(an_lo * np.maximum(rc_lo, 0), 1), np.minimum(an_hi * rc_hi, 1)
+    e_prop = prop_lut(prop_bits).error_over(yk_lo, yk_hi) * 2.0**-PROP_FRAC
     tprop = lambda v: 1 - np.arccos(v) / (np.pi / 2)                          # noqa: E731
     p_lo, p_hi = tprop(yk_lo) - e_prop, tprop(yk_hi) + e_prop
     corners = np.stack([az + (np.pi / 2 - az) * pr for az in (az_lo, az_hi)
@@ -255,10 +265,52 @@ def rotation_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
     return {"phi": phi_bound, "theta": theta_bound}
 
 
+def _exact_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8, prop_bits=12):
+    """Interval bounds of the exact variant, as _paper_bounds: cos theta' within
+    3 eps + eps**2 (the law of cosines, as illum), x' within 3 eps + eps**2 (s cos tN has
+    2 eps + eps**2, cos tA sin tN eps), y' within eps; theta' = acos through the asin table
+    (its error e_asin); |phi'| = asin(|y'| / sin theta') with 1/(2 sin theta') from the
+    reciprocal table over the interval of theta'."""
+    from hdl.rotation_unit.rotation import asin_lut, recip_sin_lut
+    from hdl.lut import quarter_cos_lut
+    lsb = 2 * np.pi / 2**angle_bits
+    a = {k: turns(v, angle_bits) for k, v in inp.items()}
+    pa, ta, pn, tn = a["phi_a"], a["theta_a"], a["phi_n"], a["theta_n"]
+    eps = quarter_cos_lut(trig_bits, 1 << (angle_bits - 2)).max_error * 2.0**-trig_bits
+    table = asin_lut(asin_bits, angle_bits)
+    d = pa - pn
+    cos_t = inner_product(pa, ta, pn, tn)
+    x = np.sin(ta) * np.cos(d) * np.cos(tn) - np.cos(ta) * np.sin(tn)
+    y = np.sin(ta) * np.sin(d)
+    e_c = 3 * eps + eps * eps
+    e_asin = table.error_over(np.abs(cos_t) - e_c, np.abs(cos_t) + e_c) * lsb
+    th_lo = np.arccos(np.clip(cos_t + e_c, -1, 1)) - e_asin
+    th_hi = np.arccos(np.clip(cos_t - e_c, -1, 1)) + e_asin
+    want = rotation_float(inp, angle_bits, "exact")
+    theta_model, phi_model = want["theta"] * lsb, want["phi"] * lsb
+    theta_bound = np.maximum(theta_model - th_lo, th_hi - theta_model) / lsb
+    recip = recip_sin_lut(angle_bits)
+    r_top, e_r = recip.contents[0] * recip.fmt.lsb, recip.max_error * recip.fmt.lsb
+    mn, mx = _range_abs_sin(th_lo, th_hi)
+    r_lo = np.minimum(1 / (2 * np.maximum(mx, 1e-300)), r_top) - e_r    # saturates at r_top
+    r_hi = np.minimum(1 / (2 * np.maximum(mn, 1e-300)), r_top) + e_r
+    y_lo, y_hi = y - eps, y + eps
+    ay_lo = np.where((y_lo <= 0) & (y_hi >= 0), 0.0, np.minimum(np.abs(y_lo), np.abs(y_hi)))
+    ay_hi = np.maximum(np.abs(y_lo), np.abs(y_hi))
+    ratio_lo = np.minimum(2 * ay_lo * np.maximum(r_lo, 0), 1)
+    ratio_hi = np.minimum(2 * ay_hi * r_hi, 1)
+    e_phi = table.error_over(ratio_lo, ratio_hi) * lsb
+    pm_lo, pm_hi = np.arcsin(ratio_lo) - e_phi, np.arcsin(ratio_hi) + e_phi
+    e_x = 3 * eps + eps * eps
+    phi_bound = _phi_arcs(phi_model, pm_lo, pm_hi, x - e_x < 0, x + e_x >= 0,
+                          y_lo < 0, y_hi >= 0) / lsb
+    return {"phi": phi_bound, "theta": theta_bound}
+
+
 # ---- bump_polar: two rotations and the illumination ------------------------------------------
 
 def _rotated(inp, vec, params):
-    keep = {k: params[k] for k in ("angle_bits", "trig_bits", "asin_bits", "atan_bits",
+    keep = {k: params[k] for k in ("method", "angle_bits", "trig_bits", "asin_bits", "atan_bits",
                                    "prop_bits") if k in params}
     rows = {"phi_n": inp["phi_n"], "theta_n": inp["theta_n"], "phi_a": inp[f"phi_{vec}"],
             "theta_a": inp[f"theta_{vec}"]}

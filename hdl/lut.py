@@ -29,6 +29,24 @@ class Lut:
     fmt: Fixed
     max_error: float
     domain: tuple | None
+    errors: np.ndarray        # each entry's own largest error, over its bin
+    edges: np.ndarray | None  # bin edges, for interval addressing
+
+    def error_over(self, lo, hi):
+        """The largest entry error over the bins that inputs in ``[lo, hi]`` address
+        (vectorised; inputs past the table's ends address its end bins)."""
+        if self.edges is None:
+            a_lo = np.clip(np.floor(lo), 0, self.depth - 1).astype(np.int64)
+            a_hi = np.clip(np.ceil(hi), 0, self.depth - 1).astype(np.int64)
+        else:
+            a_lo = np.clip(np.searchsorted(self.edges, lo, "right") - 1, 0, self.depth - 1)
+            a_hi = np.clip(np.searchsorted(self.edges, hi, "right") - 1, 0, self.depth - 1)
+        # a wide range (more than 64 bins) takes the table's overall largest error
+        wide = (a_hi - a_lo) > 64
+        a_hi = np.where(wide, a_lo, a_hi)
+        span = int((a_hi - a_lo).max()) if np.size(a_lo) else 0
+        idx = np.minimum(a_lo[..., None] + np.arange(span + 1), a_hi[..., None])
+        return np.where(wide, self.max_error, self.errors[idx].max(axis=-1))
 
     @property
     def depth(self):
@@ -92,9 +110,11 @@ def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, edges=None, oversa
     if contents.min() < fmt.min or contents.max() > fmt.max:
         raise ValueError(f"LUT entries {contents.min()}..{contents.max()} do not fit "
                          f"{'s' if fmt.signed else 'u'}{fmt.width}")
-    err = np.abs(np.asarray(fn(x_check), dtype=float) * scale - contents[:, None])
+    err = np.abs(np.asarray(fn(x_check), dtype=float) * scale - contents[:, None]).max(axis=1)
+    if edges is None and domain is not None:
+        edges = lo + np.arange(depth + 1) * step
     return Lut(contents, fmt, float(err.max()),
-               None if domain is None and edges is None else (lo, hi))
+               None if domain is None and edges is None else (lo, hi), err, edges)
 
 
 def rom(p, lut, addr, name):

@@ -50,11 +50,13 @@ class Pipeline:
         self._names = set()
         m.d.comb += [self.en.eq(~o.valid | o.ready), i.ready.eq(self.en)]
 
-    def stage(self, v):
-        """Register every value of ``v``; returns the dict of registers (the next stage)."""
+    def stage(self, v, **new):
+        """Register every value of ``v`` and of ``new``; returns the dict of registers (the
+        next stage). ``v`` is read after ``new`` is evaluated, so values a stage consumes can be
+        popped from ``v`` in ``new``'s expressions and are not carried further."""
         self.stages += 1
         out = {}
-        for name, value in v.items():
+        for name, value in {**v, **new}.items():
             value = Value.cast(value)
             reg = Signal(value.shape(), name=f"s{self.stages}_{name}")
             with self.m.If(self.en):

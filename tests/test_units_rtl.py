@@ -19,6 +19,7 @@ CONFIGS = [("texel_decode", {}), ("fenney_power", {}), ("fenney_dot", {}),
            ("rotation", {}),
            ("rotation", {"angle_bits": 10, "trig_bits": 12, "asin_bits": 10, "atan_bits": 6,
                          "prop_bits": 10}),
+           ("rotation", {"method": "exact"}),
            ("bump_polar", {})]
 
 

@@ -10,7 +10,7 @@ from ..unit import Unit
 from .illum import Illum
 
 # angles shared by both parts; each part keeps its own table parameters
-ROTATION_PARAMS = ("angle_bits", "trig_bits", "asin_bits", "atan_bits", "prop_bits")
+ROTATION_PARAMS = ("method", "angle_bits", "trig_bits", "asin_bits", "atan_bits", "prop_bits")
 
 
 class BumpPolar(Unit):

@@ -91,6 +91,6 @@ class FenneyDot(Unit):
             dq = (v.pop("dot") * G_PLAIN + (1 << 14)) >> 15
         v = p.stage({**v, "dq": dq})                                   # d * 2**14
         h = v.pop("h")
-        v = p.stage({**v, "m": ((255 - h) << D_FRAC) + h * v.pop("dq")})
+        v = p.stage(v, m=((255 - h) << D_FRAC) + h * v.pop("dq"))
         q = (v.pop("m") * DIV_K + (1 << (DIV_SHIFT - 1))) >> DIV_SHIFT
         return p.stage({**v, "x": Mux(q < 0, 0, Mux(q > 1023, 1023, q))[:10]})

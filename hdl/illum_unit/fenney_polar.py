@@ -61,9 +61,9 @@ class FenneyPolar(Unit):
                      "cos_s": rom(p, lut, s, "cos_s"),
                      "cos_d": cos_d, "neg": neg})                  # sign bit 26
         k2, k3 = v.pop("k2"), v.pop("k3")
-        v = p.stage({**v, "m12": k2 * v.pop("sin_s"), "m14": k3 * v.pop("cos_s")})
-        v = p.stage({**v, "m20": v.pop("m14") * v.pop("cos_d"),
-                     "a22": (v.pop("k1") << (2 * t)) + (v.pop("m12") << t)})
+        v = p.stage(v, m12=k2 * v.pop("sin_s"), m14=k3 * v.pop("cos_s"))
+        v = p.stage(v, m20=v.pop("m14") * v.pop("cos_d"),
+                    a22=(v.pop("k1") << (2 * t)) + (v.pop("m12") << t))
         m20, a22 = v.pop("m20"), v.pop("a22")
         total = Mux(v.pop("neg"), a22 - m20, a22 + m20)             # add/subtract unit 24
         s11 = ((total + (1 << (2 * t - 1))) >> (2 * t))[:11].as_signed()

@@ -74,11 +74,12 @@ class Rotation(Unit):
     """Seed 003's vector rotation, one vector per clock, latency 7, three multipliers."""
     NAME = "rotation"
     DOC = "Angular vector rotation, the published method (seed 003 §3.1, Fig 7)"
-    PARAMS = {"angle_bits": 12, "trig_bits": 14, "asin_bits": 12, "atan_bits": 8,
-              "prop_bits": 12}
-    latency = 7
+    PARAMS = {"method": "paper", "angle_bits": 12, "trig_bits": 14, "asin_bits": 12,
+              "atan_bits": 8, "prop_bits": 12}
 
-    def validate(self, angle_bits, trig_bits, asin_bits, atan_bits, prop_bits):
+    def validate(self, method, angle_bits, trig_bits, asin_bits, atan_bits, prop_bits):
+        if method not in ("paper", "exact"):
+            raise ValueError(f"method must be 'paper' or 'exact', not {method!r}")
         check_int("angle_bits", angle_bits, 6, 16)
         check_int("trig_bits", trig_bits, 8, 16)
         check_int("asin_bits", asin_bits, 4, min(trig_bits + 1, 16))
@@ -97,31 +98,47 @@ class Rotation(Unit):
         return (self.angle("phi"), self.angle("theta"))
 
     @property
+    def latency(self):
+        return 7 if self.params["method"] == "paper" else 8
+
+    @property
     def tables(self):
         n, p = self.params["angle_bits"], self.params
         return {"trig": quarter_cos_lut(p["trig_bits"], 1 << (n - 2)),
                 "asin": asin_lut(p["asin_bits"], n), "recip": recip_sin_lut(n),
                 "atan": atan_lut(p["atan_bits"], n), "prop": prop_lut(p["prop_bits"])}
 
+    def asin_read(self, p, magnitude, frac, name):
+        """asin of an unsigned fixed-point value (``frac`` fraction bits, 1.0 = 2**frac),
+        saturated at the table's last bin."""
+        top = (1 << self.params["asin_bits"]) - 1
+        addr = magnitude >> (frac - self.params["asin_bits"])
+        return rom(p, self.tables["asin"], Mux(addr > top, top, addr), name)
+
+    def lookups(self, p, angles):
+        """Registered (magnitude, sign) cosine look-ups of ``{name: binary angle}``."""
+        reads = {}
+        for key, a in angles.items():
+            reads[key], reads[key + "_neg"] = cos_lookup(p, self.tables["trig"], a,
+                                                         self.params["angle_bits"], key)
+        return reads
+
     def datapath(self, p, v):
+        if self.params["method"] == "exact":
+            return self.datapath_exact(p, v)
         n, t = self.params["angle_bits"], self.params["trig_bits"]
         quarter, half = 1 << (n - 2), 1 << (n - 1)
         tab = self.tables
         v = dict(v)
         p_n, t_a, p_a = v.pop("phi_n"), v.pop("theta_a"), v.pop("phi_a")
         d = p_a - p_n
-        angles = {"sx": t_a + d - quarter, "sy": t_a - d - quarter,      # sin = cos(a - 90)
-                  "cx": t_a + d, "cy": t_a - d}
-        reads = {}
-        for key, a in angles.items():
-            reads[key], reads[key + "_neg"] = cos_lookup(p, tab["trig"], a, n, key)
-        v = p.stage({**v, **reads})                                       # 4 look-ups
+        v = p.stage({**v, **self.lookups(p, {                             # 4 look-ups
+            "sx": t_a + d - quarter, "sy": t_a - d - quarter,              # sin = cos(a - 90)
+            "cx": t_a + d, "cy": t_a - d})})
         sx, sy, cx, cy = (signed_cos(v.pop(k), v.pop(k + "_neg")) for k in ("sx", "sy", "cx", "cy"))
         v = p.stage({**v, "s2": sx + sy, "n2": cy - cx})                  # 2 sin(thx), 2 num
         s2, n2 = v.pop("s2"), v.pop("n2")
-        top = (1 << self.params["asin_bits"]) - 1
-        addr = abs(s2) >> (t + 1 - self.params["asin_bits"])
-        v = p.stage({**v, "thx": rom(p, tab["asin"], Mux(addr > top, top, addr), "asin"),
+        v = p.stage({**v, "thx": self.asin_read(p, abs(s2), t + 1, "asin"),
                      "s_neg": s2 < 0, "n_neg": n2 < 0, "n_abs": abs(n2)})
         thx = Mux(v.pop("s_neg"), -v["thx"], v.pop("thx"))
         z = (thx - v.pop("theta_n"))[:n].as_signed()                     # Z in (-180, 180]
@@ -133,7 +150,7 @@ class Rotation(Unit):
                      "rc": rom(p, tab["recip"], fold_c, "recip_cos")})
         frac = t + RECIP_FRAC
         n_abs = v.pop("n_abs")
-        v = p.stage({**v, "ratio": n_abs * v.pop("rs"), "yk": n_abs * v.pop("rc")})
+        v = p.stage(v, ratio=n_abs * v.pop("rs"), yk=n_abs * v.pop("rc"))
         ratio, yk = v.pop("ratio"), v.pop("yk")
         ptop = (1 << self.params["prop_bits"]) - 1
         paddr = yk >> (frac - self.params["prop_bits"])
@@ -143,6 +160,48 @@ class Rotation(Unit):
                      "prop": rom(p, tab["prop"], Mux(paddr > ptop, ptop, paddr), "prop")})
         az, pm = v.pop("az"), v.pop("pm")
         theta = az + (((quarter - az) * v.pop("prop") + (1 << (PROP_FRAC - 1))) >> PROP_FRAC)
-        base = Mux(v.pop("z_neg"), half - pm, pm)
-        phi = Mux(v.pop("n_neg"), -base, base)
-        return p.stage({**v, "phi": phi[:n], "theta": theta[:n]})
+        return p.stage(v, **self.quadrant(v.pop("z_neg"), v.pop("n_neg"), pm), theta=theta[:n])
+
+    def quadrant(self, x_neg, y_neg, magnitude):
+        """phi' from its first-quadrant magnitude and the signs of x' and y' (atan2)."""
+        half = 1 << (self.params["angle_bits"] - 1)
+        base = Mux(x_neg, half - magnitude, magnitude)
+        return {"phi": Mux(y_neg, -base, base)[:self.params["angle_bits"]]}
+
+    def datapath_exact(self, p, v):
+        """Beyond the paper: the exact rotation by the law of cosines, from the same tables.
+
+            cos theta' = 1/2 [cos(tA - tN) + cos(tA + tN)] + 1/2 [cos(tA - tN) - cos(tA + tN)] cos D
+            x' = sin tA cos D cos tN - cos tA sin tN,  y' = sin tA sin D
+            theta' = acos(cos theta') = 90 - asin(cos theta'),  |phi'| = asin(|y'| / sin theta')
+
+        with 1/(2 sin theta') from the reciprocal table (theta' is an exact binary angle by
+        then) and phi' by quadrant from the signs of x' and y'. Three multipliers; latency 8.
+        """
+        n, t = self.params["angle_bits"], self.params["trig_bits"]
+        quarter, half = 1 << (n - 2), 1 << (n - 1)
+        v = dict(v)
+        p_n, t_n, t_a, p_a = v.pop("phi_n"), v.pop("theta_n"), v.pop("theta_a"), v.pop("phi_a")
+        d = p_a - p_n
+        v = p.stage({**v, **self.lookups(p, {                             # 10 look-ups
+            "sx": t_a + d - quarter, "sy": t_a - d - quarter, "cx": t_a + d, "cy": t_a - d,
+            "cm": t_a - t_n, "cp": t_a + t_n, "cd": d, "cn": t_n,
+            "sp": t_n + t_a - quarter, "sm": t_n - t_a - quarter})})
+        c = {k: signed_cos(v.pop(k), v.pop(k + "_neg"))
+             for k in ("sx", "sy", "cx", "cy", "cm", "cp", "cd", "cn", "sp", "sm")}
+        v = p.stage({**v, "s2": c["sx"] + c["sy"], "n2": c["cy"] - c["cx"],   # 2 sin tA cos D, 2 y'
+                     "csum": c["cm"] + c["cp"], "cdiff": c["cm"] - c["cp"],
+                     "ssum": c["sp"] + c["sm"], "cd": c["cd"], "cn": c["cn"]})  # 2 cos tA sin tN
+        v = p.stage(v, pc=v.pop("cdiff") * v.pop("cd"), px=v.pop("s2") * v.pop("cn"))
+        c2 = (v.pop("csum") << t) + v.pop("pc")                            # 2 cos theta', 2t bits
+        x2 = v.pop("px") - (v.pop("ssum") << t)                            # 2 x', 2t bits
+        n2 = v.pop("n2")
+        v = p.stage({**v, "am": self.asin_read(p, abs(c2), 2 * t + 1, "acos"),
+                     "c_neg": c2 < 0, "x_neg": x2 < 0, "y_neg": n2 < 0, "n_abs": abs(n2)})
+        am = v.pop("am")
+        theta = Mux(v.pop("c_neg"), quarter + am, quarter - am)            # acos
+        fold = Mux(theta > quarter, half - theta, theta)                   # sin theta' = sin fold
+        v = p.stage({**v, "theta": theta[:n], "r": rom(p, self.tables["recip"], fold, "recip")})
+        v = p.stage(v, ratio=v.pop("n_abs") * v.pop("r"))                  # |y'| / sin theta'
+        v = p.stage(v, pm=self.asin_read(p, v.pop("ratio"), t + RECIP_FRAC, "asin_phi"))
+        return p.stage(v, **self.quadrant(v.pop("x_neg"), v.pop("y_neg"), v.pop("pm")))
