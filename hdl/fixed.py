@@ -62,6 +62,11 @@ def s(width, frac_bits=0, unit="1"):
     return Fixed(width, True, frac_bits, unit)
 
 
+def binary_angle(bits):
+    """An angle of ``bits`` bits in turns: raw / 2**bits of a full turn, wrapping."""
+    return Fixed(bits, False, bits, "turn")
+
+
 @dataclass(frozen=True)
 class Field:
     name: str

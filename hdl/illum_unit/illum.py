@@ -16,7 +16,7 @@ import functools
 
 from amaranth.hdl import Mux
 
-from ..fixed import Field, u
+from ..fixed import Field, binary_angle, u
 from ..lut import build_lut, quarter_cos_lut, rom
 from ..trig import cos_lookup, signed_cos
 from ..unit import Unit, check_int
@@ -44,7 +44,7 @@ class Illum(Unit):
         check_int("shininess", shininess, 1, 1024)
 
     def angle(self, name):
-        return Field(name, u(self.params["angle_bits"], self.params["angle_bits"], "turn"))
+        return Field(name, binary_angle(self.params["angle_bits"]))
 
     @property
     def inputs(self):

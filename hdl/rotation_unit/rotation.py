@@ -28,7 +28,7 @@ import functools
 import numpy as np
 from amaranth.hdl import Mux
 
-from ..fixed import Field, Fixed, u
+from ..fixed import Field, Fixed, binary_angle, u
 from ..lut import build_lut, float_address, float_bins, quarter_cos_lut, rom
 from ..trig import cos_lookup, signed_cos
 from ..unit import Unit, check_int
@@ -71,9 +71,9 @@ def prop_lut(addr_bits):
 
 
 class Rotation(Unit):
-    """Seed 003's vector rotation, one vector per clock, latency 7, three multipliers."""
+    """Seed 003's vector rotation (or the exact one), one vector per clock, three multipliers."""
     NAME = "rotation"
-    DOC = "Angular vector rotation, the published method (seed 003 §3.1, Fig 7)"
+    DOC = "Angular vector rotation: the published method (seed 003 §3.1, Fig 7) or exact"
     PARAMS = {"method": "paper", "angle_bits": 12, "trig_bits": 14, "asin_bits": 12,
               "atan_bits": 8, "prop_bits": 12}
 
@@ -87,7 +87,7 @@ class Rotation(Unit):
         check_int("prop_bits", prop_bits, 4, 16)
 
     def angle(self, name):
-        return Field(name, u(self.params["angle_bits"], self.params["angle_bits"], "turn"))
+        return Field(name, binary_angle(self.params["angle_bits"]))
 
     @property
     def inputs(self):
