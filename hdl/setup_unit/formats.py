@@ -1,0 +1,50 @@
+"""The formats of the quadratic-shading pipeline (setup -> span), stated once.
+
+- Vertex coordinates: pixels, signed, ``sub_bits`` fraction bits, two integer bits beyond the
+  screen (a vertex may lie up to one screen width outside it on either side).
+- Channel values (vertex values in, fragment values out): ``VALUE``, s16 with 14 fraction bits,
+  range [-2, 2); a fragment value outside it saturates.
+- Per-edge constants of X-shading (Ni.Nj - 1)/2: ``EDGE``, s16 with 15 fraction bits, [-1, 0]
+  for unit normals.
+- Fragment coordinates: unsigned pixel indices below the screen size.
+"""
+from ..fixed import Field, s, u
+
+VALUE = s(16, 14)
+EDGE = s(16, 15)
+TRI = u(32)                       # the input row a fragment came from
+
+
+def coord(screen_bits, sub_bits):
+    return s(screen_bits + 2 + sub_bits, sub_bits, "px")
+
+
+def triangle_fields(screen_bits, sub_bits, channels):
+    c = coord(screen_bits, sub_bits)
+    return ([Field(f"{a}{k}", c) for k in range(3) for a in "xy"]
+            + [Field(n, EDGE) for n in ("e01", "e02", "e12")]
+            + [Field(f"v{ch}_{k}", VALUE) for ch in range(channels) for k in range(3)])
+
+
+def fragment_fields(screen_bits, channels):
+    return ([Field("tri", TRI), Field("x", u(screen_bits, 0, "px")),
+             Field("y", u(screen_bits, 0, "px"))]
+            + [Field(f"v{ch}", VALUE) for ch in range(channels)])
+
+
+MODES = ("xshading", "exact", "linear")
+
+
+def parse_modes(modes, channels):
+    """``"xshading,linear"`` -> a tuple, one mode per channel (one name applies to all)."""
+    if not isinstance(modes, str):
+        raise TypeError(f"modes must be a comma-separated string, not {modes!r}")
+    out = tuple(m.strip() for m in modes.split(","))
+    if len(out) == 1:
+        out = out * channels
+    if len(out) != channels:
+        raise ValueError(f"modes names {len(out)} channel(s) but channels={channels}")
+    bad = [m for m in out if m not in MODES]
+    if bad:
+        raise ValueError(f"unknown mode {bad[0]!r}; modes are {', '.join(MODES)}")
+    return out
