@@ -47,6 +47,7 @@ class Pipeline:
         self.en = Signal()
         self.stages = 0
         self._valid = i.valid
+        self.valids = []                   # every stage's valid bit: the pipeline is busy if any
         self._names = set()
         m.d.comb += [self.en.eq(~o.valid | o.ready), i.ready.eq(self.en)]
 
@@ -66,6 +67,7 @@ class Pipeline:
         with self.m.If(self.en):
             self.m.d.sync += valid.eq(self._valid)
         self._valid = valid
+        self.valids.append(valid)
         return out
 
     def unique(self, name):
@@ -102,7 +104,10 @@ class Unit(wiring.Component):
         super().__init__({
             "i": In(stream.Signature(layout(self.inputs))),
             "o": Out(stream.Signature(layout(self.outputs))),
+            **self.status_ports,
         })
+
+    status_ports = {}   # extra outputs (a unit that emits many rows per input: busy, counters)
 
     @classmethod
     def spec(cls, **params):

@@ -3,10 +3,11 @@ all go through it, so a unit registered here is exported, linted, simulated and 
 from .illum_unit import (BumpPolar, FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, Illum,
                          TexelDecode)
 from .rotation_unit import Rotation
+from .span_unit import Raster
 from .unit import Unit
 
 UNITS = {cls.NAME: cls for cls in (TexelDecode, FenneyPower, FenneyDot, FenneyXZ, FenneyPolar,
-                                   Illum, Rotation, BumpPolar)}
+                                   Illum, Rotation, BumpPolar, Raster)}
 
 
 class ParamError(ValueError):

@@ -35,7 +35,8 @@ def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=
         out, traffic = run_amaranth(make_unit(name, **params), inputs, p_valid=p_valid,
                                     p_ready=p_ready, seed=seed, vcd=waves,
                                     progress=name if progress else None)
-        return out, {"latency": traffic.latency, "cycles": traffic.cycles, "waves": waves}
+        return out, {"latency": traffic.latency, "cycles": traffic.cycles, "waves": waves,
+                     **getattr(traffic, "status", {})}
     from .cocotb_run import SimulatorMissing, run_cocotb
     try:
         return run_cocotb(name, params, inputs, simulator, p_valid=p_valid, p_ready=p_ready,

@@ -11,9 +11,11 @@ def fields_of(unit):
 def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, progress=None):
     """Run every row of ``inputs`` through ``unit``; returns ``(outputs, traffic)``."""
     fin, fout = fields_of(unit)
+    many = hasattr(unit, "busy")
     traffic = Traffic(pack(fin, inputs), p_valid=p_valid, p_ready=p_ready, seed=seed,
-                      progress=progress)
+                      progress=progress, many=many)
     i_raw, o_raw = unit.i.payload.as_value(), unit.o.payload.as_value()
+    busy = unit.busy if many else unit.o.valid
 
     async def bench(ctx):
         while not traffic.done:
@@ -21,9 +23,11 @@ def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, pr
             ctx.set(unit.i.valid, valid)
             ctx.set(i_raw, payload)
             ctx.set(unit.o.ready, ready)
-            _, _, i_ready, o_valid, o_payload = \
-                await ctx.tick().sample(unit.i.ready, unit.o.valid, o_raw)
-            traffic.edge(i_ready, o_valid, o_payload)
+            _, _, i_ready, o_valid, o_payload, b = \
+                await ctx.tick().sample(unit.i.ready, unit.o.valid, o_raw, busy)
+            traffic.edge(i_ready, o_valid, o_payload, b)
+        if many:
+            traffic.status = {"culled": ctx.get(unit.culled)}
 
     sim = Simulator(unit)
     sim.add_clock(1e-8)

@@ -21,7 +21,8 @@ async def stream_vectors(dut):
     spec = json.loads(open(os.environ["SHADE_SPEC"]).read())
     inputs = dict(np.load(os.environ["SHADE_IN"]))
     traffic = Traffic(pack(spec["inputs"], inputs), p_valid=spec["p_valid"],
-                      p_ready=spec["p_ready"], seed=spec["seed"])
+                      p_ready=spec["p_ready"], seed=spec["seed"], many=spec["many"])
+    busy = dut.busy if spec["many"] else None
     Clock(dut.clk, 10, unit="ns").start()
     dut.rst.value = 1
     dut.i__valid.value = 0
@@ -41,6 +42,8 @@ async def stream_vectors(dut):
         o_ready.value = ready
         await ReadOnly()
         ov = int(o_valid.value)
-        traffic.edge(int(i_ready.value), ov, o_payload.value.to_unsigned() if ov else 0)
+        traffic.edge(int(i_ready.value), ov, o_payload.value.to_unsigned() if ov else 0,
+                     int(busy.value) if busy is not None else None)
+    status = {"culled": int(dut.culled.value)} if spec["many"] else {}
     np.savez(os.environ["SHADE_OUT"], latency=traffic.latency if traffic.latency is not None
-             else -1, cycles=traffic.cycles, **unpack(spec["outputs"], traffic.out))
+             else -1, cycles=traffic.cycles, **status, **unpack(spec["outputs"], traffic.out))

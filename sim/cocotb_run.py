@@ -88,7 +88,8 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
     unit = make_unit(name, spec=True, **params)
     spec = {"inputs": [f.describe() for f in unit.inputs],
             "outputs": [f.describe() for f in unit.outputs],
-            "p_valid": p_valid, "p_ready": p_ready, "seed": seed}
+            "p_valid": p_valid, "p_ready": p_ready, "seed": seed,
+            "many": bool(unit.status_ports)}
     with tempfile.TemporaryDirectory(dir=build_dir) as tmp:
         tmp = Path(tmp)
         (tmp / "spec.json").write_text(json.dumps(spec))
@@ -120,4 +121,6 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
                     shutil.copy(found[0], wave)
                     break
     info = {"latency": int(got.pop("latency")), "cycles": int(got.pop("cycles")), "waves": wave}
+    if "culled" in got:
+        info["culled"] = int(got.pop("culled"))
     return got, info

@@ -52,8 +52,11 @@ class Traffic:
     """
 
     def __init__(self, words, *, p_valid=1.0, p_ready=1.0, seed=0, max_cycles=None,
-                 progress=None):
+                 progress=None, many=False):
         self.words = words
+        self.many = many                  # outputs per input vary: done when idle (``busy`` low)
+        self.busy = True
+        self.quiet = 0                    # cycles since the last handshake (the watchdog)
         self.progress = progress          # a label: report every tenth of the rows on stderr
         self._tenth = max(1, len(words) // 10)
         self.rng = random.Random(seed)
@@ -68,6 +71,8 @@ class Traffic:
 
     @property
     def done(self):
+        if self.many:
+            return self.sent >= len(self.words) and not self.busy
         return len(self.out) >= len(self.words)
 
     def drive(self):
@@ -77,7 +82,10 @@ class Traffic:
         payload = self.words[self.sent] if self.valid else 0
         return int(self.valid), payload, int(self.ready)
 
-    def edge(self, i_ready, o_valid, o_payload):
+    def edge(self, i_ready, o_valid, o_payload, busy=None):
+        """``busy`` (units with ``many`` outputs per input): the unit's busy port this cycle."""
+        taken = self.valid and i_ready
+        moved = taken or (o_valid and self.ready)
         if self.valid and i_ready:
             if self.first_in is None:
                 self.first_in = self.cycles
@@ -87,11 +95,20 @@ class Traffic:
             if self.first_out is None:
                 self.first_out = self.cycles
             self.out.append(o_payload)
-            if self.progress and len(self.out) % self._tenth == 0:
+            if self.progress and not self.many and len(self.out) % self._tenth == 0:
                 print(f"{self.progress}: {len(self.out)}/{len(self.words)} rows",
                       file=sys.stderr, flush=True)
         self.cycles += 1
-        if self.cycles > self.max_cycles:
+        if self.many:
+            self.busy = bool(busy) or bool(o_valid) or taken      # busy is sampled before
+            if taken and self.progress and self.sent % self._tenth == 0:  # the edge
+                print(f"{self.progress}: {self.sent}/{len(self.words)} inputs, "
+                      f"{len(self.out)} outputs", file=sys.stderr, flush=True)
+            self.quiet = 0 if moved else self.quiet + 1
+            if self.quiet > 100_000:
+                raise StreamError(f"no progress for 100,000 cycles: {self.sent} of "
+                                  f"{len(self.words)} inputs sent, {len(self.out)} outputs")
+        elif self.cycles > self.max_cycles:
             raise StreamError(f"no progress: {len(self.out)} of {len(self.words)} outputs after "
                               f"{self.cycles} cycles")
 

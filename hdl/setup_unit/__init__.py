@@ -1,1 +1,4 @@
-"""Triangle setup (seeds 001, 002): not built yet; see the quadratic-shading issue."""
+"""Triangle setup (seeds 001, 002): sort, Omega and its reciprocal, coefficients, edge DDAs."""
+from .setup import Setup, Widths
+
+__all__ = ["Setup", "Widths"]

@@ -33,6 +33,7 @@ def fragment_fields(screen_bits, channels):
 
 
 MODES = ("xshading", "exact", "linear")
+EXACT_G_MAX = 64.0   # exact mid-edges: 1/||Ni + Nj|| clamps here (normals within 0.9 deg of opposite)
 
 
 def parse_modes(modes, channels):

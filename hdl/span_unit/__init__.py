@@ -1,1 +1,4 @@
-"""Forward-difference span engine (seeds 000, 001): not built yet; see the quadratic-shading issue."""
+"""The forward-difference span engine (seeds 000, 001) and ``raster``, setup -> span."""
+from .raster import Raster
+
+__all__ = ["Raster"]

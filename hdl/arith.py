@@ -1,0 +1,145 @@
+"""Pipelined arithmetic shared by the setup unit: normalisation, the reciprocal (Newton-Raphson
+from a table seed, or a restoring divider), the reciprocal square root, and floor division.
+
+Every function takes a :class:`hdl.unit.Pipeline` ``p`` and the dict ``v`` of values at the
+current stage, adds stages, and returns the dict at the last one (values ride along).
+"""
+import functools
+
+import numpy as np
+from amaranth.hdl import Cat, Const, Mux, signed, unsigned
+
+from .fixed import u
+from .lut import build_lut, rom
+
+__all__ = ["leading_one", "normalise", "recip_stages", "recip", "rsqrt_stages", "rsqrt",
+           "divide_stages", "floor_divide"]
+
+
+def leading_one(value, width):
+    """The position of the highest set bit of an unsigned value (0 for 0)."""
+    pos = Const(0, range(width))
+    for k in range(width):
+        pos = Mux(value[k], k, pos)
+    return pos
+
+
+def normalise(value, width):
+    """``(n, s)`` with ``value = n * 2**(s - width + 1)``, ``n`` in ``[2**(width-1), 2**width)``
+    (a mantissa in [1, 2) with ``width - 1`` fraction bits) for nonzero ``value``."""
+    s = leading_one(value, width)
+    shamt = Const(width - 1, range(width))
+    for k in range(width):
+        shamt = Mux(value[k], width - 1 - k, shamt)
+    return (value << shamt)[:width], s
+
+
+@functools.lru_cache(maxsize=None)
+def recip_seed(seed_bits, frac):
+    """1/m over m in [1, 2), ``seed_bits`` address bits (the mantissa's top fraction bits)."""
+    return build_lut(lambda m: 1 / m, seed_bits, u(frac + 1, frac), domain=(1.0, 2.0))
+
+
+@functools.lru_cache(maxsize=None)
+def rsqrt_seed(seed_bits, frac):
+    """1/sqrt(m) over m in [1, 4): the even/odd exponent bit, then ``seed_bits - 1`` bits."""
+    half = 1 << (seed_bits - 1)
+    edges = np.concatenate([1 + np.arange(half) / half, 2 + 2 * np.arange(half) / half, [4.0]])
+    return build_lut(lambda m: 1 / np.sqrt(m), seed_bits, u(frac + 1, frac), edges=edges)
+
+
+def recip_stages(method, iters):
+    return {"divide": None, "newton": 1 + 2 * iters}[method]
+
+
+def recip(p, v, key, width, frac, method="newton", iters=2, seed_bits=8, out="r"):
+    """``v[out]`` ~ 2**frac / m for the mantissa ``m = v[key] / 2**(width-1)`` in [1, 2)
+    (so in (2**(frac-1), 2**frac]): by ``iters`` Newton-Raphson steps r' = r (2 - m r) from a
+    ``seed_bits`` table, or (``method="divide"``) by a restoring divider, ``frac + 1`` stages,
+    truncating. Relative error: the seed's, squared per step, floored by ``frac``'s rounding."""
+    if method == "divide":
+        v = {**v, "_num": Const(1 << (frac + width - 1), unsigned(frac + width + 1))}
+        v = _restoring(p, v, [("_num", key, frac + 1, out, None)])
+        v.pop("_num")
+        return v
+    lut = recip_seed(seed_bits, frac)
+    n = v[key]
+    v = p.stage(v, **{out: rom(p, lut, n[width - 1 - seed_bits:width - 1], "recip_seed")})
+    for _ in range(iters):
+        n, r = v[key], v[out]
+        mr = (n * r) >> (width - 1)                                   # m r, frac bits
+        v = p.stage(v, _t=Const(2 << frac, unsigned(frac + 3)) - mr)  # 2 - m r
+        v = p.stage(v, **{out: ((v[out] * v.pop("_t")) >> frac)[:frac + 1]})
+    return v
+
+
+def rsqrt_stages(iters):
+    return 1 + 3 * iters
+
+
+def rsqrt(p, v, key, width, frac, iters=2, seed_bits=8, out="g"):
+    """``v[out]`` ~ 2**frac / sqrt(m) for ``m = v[key] / 2**(width-2)`` in [1, 4) (``v[key]``
+    has ``width`` bits, top two bits not both 0): Newton-Raphson y' = y (3 - m y^2) / 2."""
+    lut = rsqrt_seed(seed_bits, frac)
+    n = v[key]
+    addr = Cat(n[width - 1 - (seed_bits - 1):width - 1], n[width - 1])
+    v = p.stage(v, **{out: rom(p, lut, addr, "rsqrt_seed")})
+    for _ in range(iters):
+        y = v[out]
+        v = p.stage(v, _y2=(y * y) >> frac)
+        v = p.stage(v, _t=Const(3 << frac, unsigned(frac + 3))
+                    - ((v[key] * v.pop("_y2")) >> (width - 2)))
+        v = p.stage(v, **{out: ((v[out] * v.pop("_t")) >> (frac + 1))[:frac + 1]})
+    return v
+
+
+def _restoring(p, v, jobs):
+    """Unsigned restoring division, one quotient bit per stage, several divisions side by side.
+    jobs: (num_key, den_key, q_bits, q_out, r_out); num < den * 2**q_bits is the caller's."""
+    depth = max(j[2] for j in jobs)
+    v = dict(v)
+    for name, den, q_bits, q_out, r_out in jobs:
+        v[q_out] = Const(0, q_bits)
+        v["_rem_" + q_out] = v[name]
+    for t in range(depth):
+        new = {}
+        for name, den, q_bits, q_out, r_out in jobs:
+            bit = depth - 1 - t
+            if bit >= q_bits:
+                continue
+            rem = v["_rem_" + q_out]
+            trial = rem - (v[den] << bit)
+            ok = trial >= 0
+            new["_rem_" + q_out] = Mux(ok, trial, rem)[:len(rem)]
+            new[q_out] = v[q_out] | (ok << bit)
+        v = p.stage(v, **new)
+    for name, den, q_bits, q_out, r_out in jobs:
+        rem = v.pop("_rem_" + q_out)
+        if r_out:
+            v[r_out] = rem
+    return v
+
+
+def divide_stages(q_bits):
+    return q_bits + 2
+
+
+def floor_divide(p, v, jobs):
+    """Signed floor division side by side: jobs ``(num_key, den_key, q_bits, q_out, r_out)``
+    give ``q = floor(num / den)`` (signed, ``q_bits`` magnitude bits plus sign) and
+    ``r = num - q den`` in [0, den), for den > 0 and |q| < 2**q_bits.
+    Negative numerators go through M = -num - 1: q = -q(M) - 1, r = den - 1 - r(M)."""
+    pre = {}
+    for num, den, q_bits, q_out, r_out in jobs:
+        n = v[num]
+        pre["_neg_" + q_out] = n < 0
+        pre["_m_" + q_out] = Mux(n < 0, -n - 1, n).as_unsigned()[:len(n)]
+    v = p.stage(v, **pre)
+    v = _restoring(p, v, [("_m_" + q, d, qb, q, r) for _, d, qb, q, r in jobs])
+    post = {}
+    for num, den, q_bits, q_out, r_out in jobs:
+        v.pop("_m_" + q_out)
+        neg, q, r = v.pop("_neg_" + q_out), v.pop(q_out), v.pop(r_out)
+        post[q_out] = Mux(neg, -(q + 1), q + Const(0, signed(2)))
+        post[r_out] = Mux(neg, v[den] - 1 - r, r)[:len(v[den])]
+    return p.stage(v, **post)
