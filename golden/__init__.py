@@ -16,9 +16,11 @@ from typing import Callable
 
 import numpy as np
 
-from . import angular, fenney
+from hdl.setup_unit.formats import EDGE, VALUE
 
-__all__ = ["MODELS", "Model"]
+from . import angular, fenney, raster
+
+__all__ = ["MODELS", "Model", "raster_hard_cases", "random_triangles"]
 
 
 @dataclass(frozen=True)
@@ -292,6 +294,91 @@ def _bump_vectors(rng, n, angle_bits=12, **_):
             "theta_b": rng.integers(0, quarter * 2 // 3 + 1, m)}      # bumps within 60 deg
 
 
+# ---- raster ---------------------------------------------------------------------------------
+
+def _raster_run(inp, **params):
+    out = raster.run(inp, **params)
+    return {k: (v / VALUE.lsb if k.startswith("v") else v) for k, v in out.items()}
+
+
+def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, **_):
+    """math-notes §5's setup and span cases, as triangles (raw sub-pixel coordinates)."""
+    S, W = 1 << sub_bits, 1 << screen_bits
+    c = S // 2                                   # a pixel centre's offset
+    big = 2 * W * S - 1                          # the coordinate format's largest value
+    tris = {
+        "omega=0 (collinear)": [(0, 0), (5 * S, 5 * S), (10 * S, 10 * S)],
+        "omega=0 (one point)": [(3 * S, 3 * S)] * 3,
+        "sliver |omega|=1": [(c, c), (c + 37 * S + 3, c + 1), (c + 37 * S + 2, c + 1)],
+        "sliver |omega|=1 long": [(c, c + 2 * S), (c + (W - 2) * S, c + 2 * S + 1),
+                                  (c + (W - 2) * S - 1, c + 2 * S + 1)],
+        "x1=0": [(9 * S, 2 * S), (9 * S, 20 * S + 3), (30 * S, 40 * S)],
+        "y1=0 (flat top)": [(4 * S + c, 6 * S + c), (40 * S + c, 6 * S + c), (20 * S, 50 * S)],
+        "y1=y2 (flat bottom)": [(20 * S + 5, 3 * S), (2 * S, 33 * S + c), (50 * S, 33 * S + c)],
+        "off screen": [(-W * S, -W * S // 2), (big, 5 * S), (W * S // 3, big)],
+        "sub-pixel": [(3 * S + 1, 2 * S + 7), (27 * S + 13, 9 * S + 2), (11 * S + 5, 31 * S + 15)],
+        "0- and 1-pixel spans": [(10 * S + c, 2 * S), (10 * S + c + 3, 40 * S), (10 * S + c - 4, 60 * S)],
+        "1-pixel column": [(12 * S + 2, 0), (13 * S - 2, 0), (12 * S + 8, W * S)],
+        "whole screen": [(-2 * W * S, W * S // 2), (W * S // 2, -2 * W * S), (big, big)],
+        "whole screen, other way": [(big, big), (W * S // 2, -2 * W * S), (-2 * W * S, W * S // 2)],
+        "longest span": [(-S, 4 * S), (W * S + S, 4 * S + 3), (W // 2 * S, 7 * S)],
+    }
+    n = len(tris)
+    out = {f"{a}{k}": np.array([t[k][i] for t in tris.values()], np.int64)
+           for k in range(3) for i, a in enumerate("xy")}
+    # edge constants: normals 0, 90 and 180 deg apart and between (e = (cos - 1) / 2)
+    e = (np.cos(np.radians([0, 30, 90, 120, 180, 45, 60, 90, 135, 10, 170, 100, 90, 20])) - 1) / 2
+    raw = np.clip(np.round(e * 2 ** 15), EDGE.min, 0).astype(np.int64)
+    for k, name in enumerate(("e01", "e02", "e12")):
+        out[name] = np.roll(raw, k)[:n]
+    vals = np.array([16384, -16384, 0, 8192, 16383, -7000, 12000, 3000, -16384, 9000, 16384,
+                     -2000, 5000, 100, 16000], np.int64)
+    for ch in range(channels):
+        for k in range(3):
+            out[f"v{ch}_{k}"] = np.roll(vals, 3 * ch + k)[:n]
+    return out, list(tris)
+
+
+def random_triangles(rng, n, screen_bits=10, sub_bits=4, channels=2, size=None, **_):
+    """Random triangles mostly on screen (some off it), values in [-1, 1], e in [-1, 0]."""
+    S, W = 1 << sub_bits, 1 << screen_bits
+    size = W if size is None else size
+    centre = rng.integers(0, W * S, (n, 1, 2))
+    extent = (size * S * rng.random((n, 1, 1)) ** 2).astype(np.int64) + 1
+    pts = np.clip(centre + rng.integers(-1, 2, (n, 3, 2)) * 0 +
+                  (rng.random((n, 3, 2)) * 2 - 1) * extent, -W * S, 2 * W * S - 1).astype(np.int64)
+    out = {f"{a}{k}": pts[:, k, i] for k in range(3) for i, a in enumerate("xy")}
+    for name in ("e01", "e02", "e12"):
+        out[name] = rng.integers(EDGE.min, 1, n)
+    for ch in range(channels):
+        for k in range(3):
+            out[f"v{ch}_{k}"] = rng.integers(-16384, 16385, n)
+    return out
+
+
+def _raster_vectors(rng, n, **params):
+    hard, _ = raster_hard_cases(**params)
+    rows = len(hard["x0"])
+    n = 200 if n is None else n
+    return _cat(hard, random_triangles(rng, max(0, n - rows), **params)) if n > rows else hard
+
+
+def _raster_check(inp, out, **params):
+    """Coverage must match exactly (else every fragment counts as wrong); values within one
+    LSB of the float model of the same method (docs/quadratic.md derives the widths)."""
+    want = _raster_run(inp, **params)
+    same = len(out["tri"]) == len(want["tri"]) and all(
+        np.array_equal(np.asarray(out[k]), want[k]) for k in ("tri", "x", "y"))
+    n = max(len(out["tri"]), 1)
+    if not same:
+        return {"coverage": (np.full(n, np.inf), np.zeros(n))}
+    res = {"coverage": (np.zeros(n), np.zeros(n))}
+    for k in want:
+        if k.startswith("v"):
+            res[k] = (np.abs(np.asarray(out[k], float) - want[k]), np.ones(len(want[k])))
+    return res
+
+
 MODELS = {
     "texel_decode": Model(_texel_run, _texel_vectors, _exact_check(_texel_run), True),
     "fenney_power": Model(_power_run, _power_vectors, _exact_check(_power_run), True),
@@ -301,4 +388,5 @@ MODELS = {
     "illum": Model(_illum_run, _illum_vectors, _illum_check, False),
     "rotation": Model(_rotation_run, _rotation_vectors, _rotation_check, False),
     "bump_polar": Model(_bump_run, _bump_vectors, _bump_check, False),
+    "raster": Model(_raster_run, _raster_vectors, _raster_check, False),
 }

@@ -14,6 +14,8 @@ closed form divides by zero it returns inf or nan, which the tests use to show w
 """
 import numpy as np
 
+from hdl.setup_unit.formats import EXACT_G_MAX
+
 __all__ = ["sort_vertices", "omega", "solve6", "seiler", "abbas", "lee_jen", "ortho",
            "ortho_uv", "to_screen", "xshading_uv", "xshading_samples", "exact_samples",
            "linear_uv", "uv_of", "eval_uv", "eval_xy", "duff", "EXACT_G_MAX"]
@@ -146,7 +148,6 @@ def xshading_uv(I1, I2, I3, e12, e13, e23):
     return np.stack([a, b, c, I2 - I1 - a, I3 - I1 - b, I1], -1)
 
 
-EXACT_G_MAX = 64.0   # 1/||Ni + Nj|| is clamped here: normals within 0.9 deg of opposite
 
 
 def exact_mid(Ia, Ib, e, lo=-2.0, hi=2.0):

@@ -1,0 +1,128 @@
+"""The raster unit (setup -> span) on every simulator: exact top-left coverage against the
+independent edge-function rule, values within one LSB of the float model of the same method
+(the widths are derived for that in docs/quadratic.md), the hard cases, backpressure, cycle
+counts, and a hypothesis search for triangles that break the bound."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from golden import MODELS, random_triangles, raster_hard_cases
+from hdl.units import ParamError, make_unit
+
+from .conftest import per_simulator, stream
+
+SMALL = {"screen_bits": 6}                    # 64 x 64: whole-screen triangles in seconds
+
+
+def check(inputs, out, params):
+    """Coverage identical to the model's, values within the 1-LSB bound; the worst error."""
+    want = MODELS["raster"].run(inputs, **params)
+    assert len(out["tri"]) == len(want["tri"]), \
+        f"{len(out['tri'])} fragments, the coverage rule says {len(want['tri'])}"
+    for k in ("tri", "x", "y"):
+        bad = np.flatnonzero(out[k] != want[k])
+        assert not len(bad), (f"fragment {bad[0]}: RTL (tri, x, y) = "
+                              f"{(out['tri'][bad[0]], out['x'][bad[0]], out['y'][bad[0]])}, "
+                              f"model {(want['tri'][bad[0]], want['x'][bad[0]], want['y'][bad[0]])}")
+    worst = 0.0
+    for k in want:
+        if k.startswith("v"):
+            err = np.abs(out[k] - want[k])
+            assert err.max(initial=0) <= 1.0, (k, int(np.argmax(err)), float(err.max()))
+            worst = max(worst, float(err.max(initial=0)))
+    return worst
+
+
+@pytest.mark.parametrize("simulator,name", list(per_simulator(["raster"])))
+def test_hard_cases_with_backpressure(simulator, name):
+    params = make_unit(name, spec=True, **SMALL).params
+    hard, labels = raster_hard_cases(**params)
+    rng = np.random.default_rng(5)
+    extra = random_triangles(rng, 16, **params)
+    inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
+    out, info = stream(name, inputs, simulator, SMALL, p_valid=0.7, p_ready=0.6, seed=3)
+    check(inputs, out, params)
+    x = np.stack([inputs[f"x{k}"] for k in range(3)], -1)
+    y = np.stack([inputs[f"y{k}"] for k in range(3)], -1)
+    area2 = (x[:, 1] - x[:, 0]) * (y[:, 2] - y[:, 0]) - (x[:, 2] - x[:, 0]) * (y[:, 1] - y[:, 0])
+    assert (area2[:2] == 0).all() and info["culled"] == int((area2 == 0).sum())
+    assert np.all(np.diff(out["tri"]) >= 0)                     # in triangle order
+
+
+@pytest.mark.parametrize("simulator,name", list(per_simulator(["raster"])))
+def test_one_fragment_per_clock(simulator, name):
+    """A whole-screen triangle: 4,096 fragments in latency + 4,096 cycles, no bubble between
+    rows; then a batch of small triangles, whose cycles we state (not a timing test: cycles)."""
+    params = make_unit(name, spec=True, **SMALL).params
+    hard, labels = raster_hard_cases(**params)
+    k = labels.index("whole screen")
+    one = {f: hard[f][k:k + 1] for f in hard}
+    out, info = stream(name, one, simulator, SMALL)
+    assert len(out["tri"]) == 64 * 64
+    latency = make_unit(name, spec=True, **SMALL).latency
+    assert info["latency"] == latency
+    assert info["cycles"] <= latency + 64 * 64 + 2
+
+
+def test_the_1024_screen_longest_spans_and_steepest_curvature():
+    """Screen 1024 x 1024 (the default): a span across the whole screen, a large triangle, and
+    small triangles whose normals are 180 deg apart (the steepest curvature), on Verilator."""
+    pytest.importorskip("cocotb")
+    from sim.cocotb_run import available
+    if available("verilator"):
+        pytest.skip(available("verilator"))
+    params = make_unit("raster", spec=True).params
+    hard, labels = raster_hard_cases(**params)
+    rng = np.random.default_rng(8)
+    steep = random_triangles(rng, 40, **params, size=24)
+    steep["e01"][:] = steep["e02"][:] = steep["e12"][:] = -32768              # N1.N2 = -1
+    big = random_triangles(rng, 3, **params, size=300)
+    pick = [labels.index(n) for n in ("longest span", "x1=0", "sub-pixel", "off screen")]
+    inputs = {k: np.concatenate([hard[k][pick], steep[k], big[k]]) for k in hard}
+    for modes in ("xshading", "exact,linear"):
+        p = {"modes": modes}
+        out, info = stream("raster", inputs, "verilator", p)
+        worst = check(inputs, out, make_unit("raster", spec=True, **p).params)
+        assert worst <= 1.0
+    spans = out["x"][out["tri"] == 0]
+    assert spans.max() - spans.min() == 1023                  # a span across the screen
+
+
+@pytest.mark.parametrize("params", [{"modes": "exact,linear"}, {"recip": "divide"},
+                                    {"modes": "linear,xshading", "recip_iters": 2}])
+def test_modes_and_reciprocals_on_amaranth(params):
+    p = make_unit("raster", spec=True, **SMALL, **params).params
+    hard, _ = raster_hard_cases(**p)
+    extra = random_triangles(np.random.default_rng(6), 12, **p)
+    inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
+    out, _ = stream("raster", inputs, "amaranth", {**SMALL, **params})
+    check(inputs, out, p)
+
+
+coords = st.integers(-2 * 32 * 16, 2 * 32 * 16 - 1)
+
+
+@settings(max_examples=12)
+@given(st.lists(st.tuples(*[coords] * 6, *[st.integers(-32768, 0)] * 3,
+                          *[st.integers(-16384, 16384)] * 6), min_size=1, max_size=6),
+       st.sampled_from(["xshading", "exact"]))
+def test_property_no_triangle_breaks_the_bound(rows, modes):
+    """Any triangle the input format holds (screen 32 x 32, vertices up to a screen outside
+    it): the coverage rule, and values within one LSB."""
+    names = ["x0", "y0", "x1", "y1", "x2", "y2", "e01", "e02", "e12"] + \
+        [f"v{c}_{k}" for c in range(2) for k in range(3)]
+    inputs = {n: np.array([r[i] for r in rows], np.int64) for i, n in enumerate(names)}
+    params = {"screen_bits": 5, "modes": modes}
+    out, _ = stream("raster", inputs, "amaranth", params)
+    check(inputs, out, make_unit("raster", spec=True, **params).params)
+
+
+@pytest.mark.parametrize("params,message", [
+    ({"modes": "xshading,linear,exact"}, "modes names 3 channel(s) but channels=2"),
+    ({"modes": "phong"}, "unknown mode 'phong'"),
+    ({"recip": "magic"}, "recip must be 'newton' or 'divide'"),
+    ({"screen_bits": 13}, "screen_bits must be in 4..12"),
+])
+def test_bad_parameters_are_named(params, message):
+    with pytest.raises(ParamError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        make_unit("raster", **params)
