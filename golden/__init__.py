@@ -321,7 +321,7 @@ def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, **_):
         "1-pixel column": [(12 * S + 2, 0), (13 * S - 2, 0), (12 * S + 8, W * S)],
         "whole screen": [(-2 * W * S, W * S // 2), (W * S // 2, -2 * W * S), (big, big)],
         "whole screen, other way": [(big, big), (W * S // 2, -2 * W * S), (-2 * W * S, W * S // 2)],
-        "longest span": [(-S, 4 * S), (W * S + S, 4 * S + 3), (W // 2 * S, 7 * S)],
+        "longest span": [(W // 2 * S, 0), (-2 * W * S + S, 12 * S), (big - S, 12 * S + 3)],
     }
     n = len(tris)
     out = {f"{a}{k}": np.array([t[k][i] for t in tris.values()], np.int64)

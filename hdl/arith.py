@@ -82,7 +82,9 @@ def rsqrt(p, v, key, width, frac, iters=2, seed_bits=8, out="g"):
     has ``width`` bits, top two bits not both 0): Newton-Raphson y' = y (3 - m y^2) / 2."""
     lut = rsqrt_seed(seed_bits, frac)
     n = v[key]
-    addr = Cat(n[width - 1 - (seed_bits - 1):width - 1], n[width - 1])
+    k = seed_bits - 1                                   # bits below the leading one
+    addr = Cat(Mux(n[width - 1], n[width - 1 - k:width - 1], n[width - 2 - k:width - 2]),
+               n[width - 1])
     v = p.stage(v, **{out: rom(p, lut, addr, "rsqrt_seed")})
     for _ in range(iters):
         y = v[out]

@@ -65,27 +65,21 @@ def test_one_fragment_per_clock(simulator, name):
 
 
 def test_the_1024_screen_longest_spans_and_steepest_curvature():
-    """Screen 1024 x 1024 (the default): a span across the whole screen, a large triangle, and
-    small triangles whose normals are 180 deg apart (the steepest curvature), on Verilator."""
-    pytest.importorskip("cocotb")
-    from sim.cocotb_run import available
-    if available("verilator"):
-        pytest.skip(available("verilator"))
-    params = make_unit("raster", spec=True).params
+    """Screen 1024 x 1024 (the default): a span across the whole screen, a larger triangle,
+    and small triangles whose normals are 180 deg apart (the steepest curvature)."""
+    p = {"modes": "exact,xshading"}
+    params = make_unit("raster", spec=True, **p).params
     hard, labels = raster_hard_cases(**params)
     rng = np.random.default_rng(8)
-    steep = random_triangles(rng, 40, **params, size=24)
+    steep = random_triangles(rng, 30, **params, size=20)
     steep["e01"][:] = steep["e02"][:] = steep["e12"][:] = -32768              # N1.N2 = -1
-    big = random_triangles(rng, 3, **params, size=300)
-    pick = [labels.index(n) for n in ("longest span", "x1=0", "sub-pixel", "off screen")]
+    big = random_triangles(rng, 1, **params, size=60)
+    pick = [labels.index(n) for n in ("longest span", "x1=0", "sub-pixel")]
     inputs = {k: np.concatenate([hard[k][pick], steep[k], big[k]]) for k in hard}
-    for modes in ("xshading", "exact,linear"):
-        p = {"modes": modes}
-        out, info = stream("raster", inputs, "verilator", p)
-        worst = check(inputs, out, make_unit("raster", spec=True, **p).params)
-        assert worst <= 1.0
-    spans = out["x"][out["tri"] == 0]
-    assert spans.max() - spans.min() == 1023                  # a span across the screen
+    out, info = stream("raster", inputs, "amaranth", p)
+    assert check(inputs, out, params) <= 1.0
+    rows = out["y"][out["tri"] == 0]
+    assert np.bincount(rows).max() == 1024                    # spans across the whole screen
 
 
 @pytest.mark.parametrize("params", [{"modes": "exact,linear"}, {"recip": "divide"},
@@ -102,7 +96,7 @@ def test_modes_and_reciprocals_on_amaranth(params):
 coords = st.integers(-2 * 32 * 16, 2 * 32 * 16 - 1)
 
 
-@settings(max_examples=12)
+@settings(max_examples=8)
 @given(st.lists(st.tuples(*[coords] * 6, *[st.integers(-32768, 0)] * 3,
                           *[st.integers(-16384, 16384)] * 6), min_size=1, max_size=6),
        st.sampled_from(["xshading", "exact"]))

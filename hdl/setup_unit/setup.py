@@ -206,7 +206,7 @@ class Setup:
             x = (v[e] + (1 << 15)).as_unsigned()[:17]                 # 1 + e, 15 fraction bits
             sh = Const(0, 5)                                           # even, top bit at 17/18
             for k in range(17):
-                sh = Mux(x[k], (18 - k + 1) & ~1, sh)
+                sh = Mux(x[k], (18 - k) & ~1, sh)
             new[f"_x{e}"] = (x << sh)[:W]
             new[f"_s{e}"] = sh
             new[f"_z{e}"] = x == 0
