@@ -140,7 +140,8 @@ class Setup:
         def pick(slot, vals):
             out = vals[2]
             for k in (1, 0):
-                out = Mux(rank[k] == slot, vals[k], out)
+                hit = ~rank[k].any() if slot == 0 else rank[k] == slot   # no "x == 0": lint
+                out = Mux(hit, vals[k], out)
             return out
         opp = [v.pop("e12"), v.pop("e02"), v.pop("e01")]        # the edge opposite vertex k
         out = {f"{n}{slot}": pick(slot, vals) for slot in range(3)
@@ -174,7 +175,7 @@ class Setup:
         new = {"omega": om}
         for e, (px, py, qx, qy, j) in ends.items():
             dx, dy = v[qx] - v[px], v[qy] - v[py]
-            den = Mux(dy == 0, 1, 2 * S * dy)[:w.wden]
+            den = Mux(dy.any(), 2 * S * dy, 1)[:w.wden]
             # i = ceil(((2 px - S) dy + (2 S j + S - 2 py) dx) / den): the row's crossing, minus
             # half a pixel, in pixels; as a floor division of num + den - 1
             new[f"{e}_num"] = (2 * v[px] - S) * dy + (2 * S * v[j] + S - 2 * v[py]) * dx + den - 1
@@ -185,7 +186,7 @@ class Setup:
         v = p.stage(v, **new)                                                    # 3: Omega
         om = v.pop("omega")
         n, sh = arith.normalise(abs(om)[:w.womega], w.womega)
-        v = p.stage(v, cull=om == 0, neg=om < 0, left_long=om > 0, _n=n, sh=sh)  # 4
+        v = p.stage(v, cull=~om.any(), neg=om < 0, left_long=om > 0, _n=n, sh=sh)  # 4
         v = arith.recip(p, v, "_n", w.womega, w.R, self.recip, self.recip_iters)
         v.pop("_n")
         jobs = [(f"{e}_num", f"{e}_n", w.wi - 1, f"{e}_i", f"{e}_r") for e in EDGES]
@@ -209,7 +210,7 @@ class Setup:
                 sh = Mux(x[k], (18 - k) & ~1, sh)
             new[f"_x{e}"] = (x << sh)[:W]
             new[f"_s{e}"] = sh
-            new[f"_z{e}"] = x == 0
+            new[f"_z{e}"] = ~x.any()
         v = p.stage(v, **new)
         for e in ("e12", "e13", "e23"):
             v = arith.rsqrt(p, v, f"_x{e}", W, FG, RSQRT_ITERS, out=f"_g{e}")
