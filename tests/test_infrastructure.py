@@ -90,7 +90,11 @@ def test_registry_json_contract():
             assert set(f) == {"name", "width", "signed", "frac_bits", "unit"}
     names = {u["name"] for u in units}
     assert names == {"texel_decode", "fenney_power", "fenney_dot", "fenney_xz", "fenney_polar",
-                     "illum", "rotation", "bump_polar"}
+                     "illum", "rotation", "bump_polar", "raster"}
+    raster = next(u for u in units if u["name"] == "raster")      # screen and reciprocal
+    assert {"screen_bits", "sub_bits", "channels", "modes", "recip", "recip_iters"} \
+        <= set(raster["params"])
+    assert [f["name"] for f in raster["outputs"]] == ["tri", "x", "y", "v0", "v1"]
     dot = next(u for u in units if u["name"] == "fenney_dot")
     assert dot["params"] == {"normalize": False, "rsqrt_bits": 12}
     assert [f["name"] for f in dot["inputs"]] == ["x", "y", "z", "lx", "ly", "lz", "h"]
