@@ -345,8 +345,7 @@ def random_triangles(rng, n, screen_bits=10, sub_bits=4, channels=2, size=None, 
     size = W if size is None else size
     centre = rng.integers(0, W * S, (n, 1, 2))
     extent = (size * S * rng.random((n, 1, 1)) ** 2).astype(np.int64) + 1
-    pts = np.clip(centre + rng.integers(-1, 2, (n, 3, 2)) * 0 +
-                  (rng.random((n, 3, 2)) * 2 - 1) * extent, -W * S, 2 * W * S - 1).astype(np.int64)
+    pts = np.clip(centre + (rng.random((n, 3, 2)) * 2 - 1) * extent, -W * S, 2 * W * S - 1).astype(np.int64)
     out = {f"{a}{k}": pts[:, k, i] for k in range(3) for i, a in enumerate("xy")}
     for name in ("e01", "e02", "e12"):
         out[name] = rng.integers(EDGE.min, 1, n)

@@ -16,10 +16,10 @@ from hdl.setup_unit.formats import EDGE, VALUE, coord, parse_modes
 
 from . import quadratic as q
 
-__all__ = ["coverage", "run", "channel_uv", "fragment_count"]
+__all__ = ["coverage", "run", "channel_uv", "sorted_triangles"]
 
 
-def _vertices(inputs, sub_bits):
+def _vertices(inputs):
     x = np.stack([np.asarray(inputs[f"x{k}"], np.int64) for k in range(3)], -1)
     y = np.stack([np.asarray(inputs[f"y{k}"], np.int64) for k in range(3)], -1)
     return x, y
@@ -82,7 +82,7 @@ def sorted_triangles(inputs, channels, sub_bits):
     """Sort each triangle's vertices (by y, then x), as the setup unit does; returns the order,
     the top vertex, x1 y1 x2 y2 (pixels), the sorted values per channel and the edge constants
     (e12, e13, e23) in sorted labels."""
-    x, y = _vertices(inputs, sub_bits)
+    x, y = _vertices(inputs)
     order = np.lexsort((x, y), axis=-1)
     xs, ys = np.take_along_axis(x, order, -1), np.take_along_axis(y, order, -1)
     scale = 2.0 ** -sub_bits
@@ -106,7 +106,7 @@ def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", **_):
     """Fragments of every triangle: ``tri x y`` and ``v{k}`` (reals, saturated to the value
     range), in the order the RTL emits them (by triangle, row, column)."""
     modes = parse_modes(modes, channels)
-    x, y = _vertices(inputs, sub_bits)
+    x, y = _vertices(inputs)
     tri, px, py = coverage(x, y, sub_bits, screen_bits)
     out = {"tri": tri, "x": px, "y": py}
     st = sorted_triangles(inputs, channels, sub_bits)
@@ -122,7 +122,3 @@ def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", **_):
         out[f"v{ch}"] = np.clip(q.eval_uv(uv[tri], u, v), lo, hi)
     return out
 
-
-def fragment_count(inputs, screen_bits=10, sub_bits=4, **_):
-    x, y = _vertices(inputs, sub_bits)
-    return len(coverage(x, y, sub_bits, screen_bits)[0])

@@ -48,8 +48,9 @@ def rsqrt_seed(seed_bits, frac):
     return build_lut(lambda m: 1 / np.sqrt(m), seed_bits, u(frac + 1, frac), edges=edges)
 
 
-def recip_stages(method, iters):
-    return {"divide": None, "newton": 1 + 2 * iters}[method]
+def recip_stages(method, iters, frac):
+    """Stages of :func:`recip`: the divider's quotient bits, or the seed and two per step."""
+    return frac + 1 if method == "divide" else 1 + 2 * iters
 
 
 def recip(p, v, key, width, frac, method="newton", iters=2, seed_bits=8, out="r"):

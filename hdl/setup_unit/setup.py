@@ -122,8 +122,7 @@ class Setup:
         edge divisions; the exact mid-edges' rsqrt (if a channel is exact); coefficients and
         alpha; alpha squared; 2A. The parts run one after another (values ride along): a
         longer latency, still one triangle per clock."""
-        recip = self.w.R + 1 if self.recip == "divide" else \
-            arith.recip_stages("newton", self.recip_iters)
+        recip = arith.recip_stages(self.recip, self.recip_iters, self.w.R)
         exact = 3 * arith.rsqrt_stages(RSQRT_ITERS) + 2 if "exact" in self.modes else 0
         return 4 + recip + arith.divide_stages(self.w.qstep) + exact + 3
 
