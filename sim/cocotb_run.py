@@ -104,6 +104,9 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
                         build_dir=build_dir, test_dir=tmp, extra_env=env, waves=waves,
                         results_xml=str(tmp / "results.xml"), log_file=tmp / "sim.log",
                         timescale=("1ns", "1ps"))
+        except SystemExit:             # the runner exits when the bench fails: say why
+            log = (tmp / "sim.log").read_text()[-3000:] if (tmp / "sim.log").exists() else ""
+            raise RuntimeError(f"cocotb run of {name} on {simulator} failed:\n{log}") from None
         finally:
             os.environ.clear()
             os.environ.update(saved)
