@@ -138,3 +138,15 @@ def test_verilog_exports_lint_clean(name, tmp_path):
     for port in ("i__payload", "i__valid", "i__ready", "o__payload", "o__valid", "o__ready"):
         assert port in text
     lint(path, name)            # raises on any warning we have not accepted by name
+
+
+@pytest.mark.xdist_group("grouping-check")
+def test_xdist_groups_hold(request):
+    """Under ``--dist loadgroup`` each (simulator, unit) group must stay on one worker, or two
+    workers build and wipe the same model at once. xdist marks a grouped test by suffixing its
+    node id with ``@group``; a pytest that ignores the suffix (pytest 9 with xdist 3.8) fails
+    here instead of intermittently in a simulator test."""
+    if request.config.getoption("dist", "no") == "no" and \
+            not getattr(request.config.option, "loadgroup", False):
+        pytest.skip("not running under pytest-xdist --dist loadgroup")
+    assert request.node.nodeid.endswith("@grouping-check")
