@@ -6,7 +6,8 @@ STAMP   := $(VENV)/.installed
 UNIT    ?=
 PARAM   ?=
 SIM     ?= icarus
-VECTORS ?= 5000
+VECTORS ?=
+WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
@@ -29,11 +30,11 @@ verilog: setup
 	$(PY) -m sim verilog
 
 # Golden vectors through the cocotb benches: make sim [UNIT=name] [SIM=icarus|verilator|amaranth]
-# [VECTORS=n|all] [PARAM="name=value ..."]. One verdict line per unit; waveforms in
-# build/sim/<sim>/.
+# [VECTORS=n|all] [PARAM="name=value ..."] [WAVES=1]. A verdict per unit; with WAVES=1 a waveform
+# per unit in build/sim/<sim>/.
 sim: setup
-	$(PY) -m sim check --simulator $(SIM) --vectors $(VECTORS) $(if $(UNIT),--unit $(UNIT)) \
-		$(foreach p,$(PARAM),--param $(p))
+	$(PY) -m sim check --simulator $(SIM) $(if $(VECTORS),--vectors $(VECTORS)) \
+		$(if $(UNIT),--unit $(UNIT)) $(if $(WAVES),--waves) $(foreach p,$(PARAM),--param $(p))
 
 # Hardware counts of every unit from Yosys (multipliers, adders, tables), beside the seeds'.
 report: setup

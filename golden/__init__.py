@@ -4,9 +4,9 @@
 
 - ``run(inputs, **params)``: output arrays in raw units (integers from a bit-exact model,
   reals from a float model);
-- ``vectors(rng, n, **params)``: the hard cases of ``design/math-notes.md`` §5 first, then
-  random rows up to ``n``; ``n=None`` gives the full sweep (exhaustive where the input space
-  allows);
+- ``vectors(rng, n, **params)``: exactly ``n`` rows: the hard cases of
+  ``design/math-notes.md`` §5 first, then random rows; ``n=None`` gives the full sweep
+  (exhaustive where the input space allows);
 - ``check(inputs, outputs, **params)``: ``{field: (error, bound)}`` per row, where ``error`` is
   ``|RTL - model|`` (or the distance to the set of allowed values) and ``bound`` the derived
   limit (0 for bit-exact fields).
@@ -26,9 +26,14 @@ __all__ = ["MODELS", "Model", "raster_hard_cases", "random_triangles"]
 @dataclass(frozen=True)
 class Model:
     run: Callable
-    vectors: Callable
+    make_vectors: Callable     # hard cases first, then random rows; may give more than n
     check: Callable
-    exact: bool  # every output bit-exact
+    exact: bool              # every output bit-exact
+    typical: int = 5000      # rows (triangles for raster) that make sim streams by default
+
+    def vectors(self, rng, n, **params):
+        out = self.make_vectors(rng, n, **params)
+        return out if n is None else {k: np.asarray(v)[:n] for k, v in out.items()}
 
 
 def _grid(*axes):
@@ -355,11 +360,19 @@ def random_triangles(rng, n, screen_bits=10, sub_bits=4, channels=2, size=None, 
     return out
 
 
+TYPICAL_SIZE = 40    # random_triangles' size for about 100 pixels a triangle on average, as
+                     # on the default torus scene
+
+
 def _raster_vectors(rng, n, **params):
-    hard, _ = raster_hard_cases(**params)
-    rows = len(hard["x0"])
-    n = 200 if n is None else n
-    return _cat(hard, random_triangles(rng, max(0, n - rows), **params)) if n > rows else hard
+    """``n`` triangles: the hard cases, on a screen of at most 64 x 64 pixels (about 33,000
+    fragments; the tests run them on the full screen too), then random triangles of typical
+    size. The full sweep (``n=None``): the hard cases on the full screen (whole-screen
+    triangles, the longest spans) and 1,000 typical triangles."""
+    small = {**params, "screen_bits": min(params.get("screen_bits", 10), 6)}
+    hard, _ = raster_hard_cases(**(params if n is None else small))
+    more = 1000 if n is None else max(0, n - len(hard["x0"]))
+    return _cat(hard, random_triangles(rng, more, **params, size=TYPICAL_SIZE))
 
 
 def _raster_check(inp, out, **params):
@@ -387,5 +400,5 @@ MODELS = {
     "illum": Model(_illum_run, _illum_vectors, _illum_check, False),
     "rotation": Model(_rotation_run, _rotation_vectors, _rotation_check, False),
     "bump_polar": Model(_bump_run, _bump_vectors, _bump_check, False),
-    "raster": Model(_raster_run, _raster_vectors, _raster_check, False),
+    "raster": Model(_raster_run, _raster_vectors, _raster_check, False, typical=300),
 }

@@ -5,9 +5,10 @@ models are rounded to the nearest raw step and saturated to the field)."""
 import argparse
 
 from hdl.units import UNITS, make_unit, parse_params
-from sim.cli_common import read_inputs, user_errors, write_outputs
+from sim.cli_common import (check_output_path, read_inputs, rows, summary, user_errors,
+                            write_outputs)
 
-from . import MODELS
+from . import MODELS, raster
 
 
 def main(argv=None):
@@ -24,8 +25,12 @@ def main(argv=None):
         params = parse_params(args.unit, args.param)
         unit = make_unit(args.unit, spec=True, **params)
         inputs = read_inputs(unit, args.inp)
-        write_outputs(unit, args.out, MODELS[args.unit].run(inputs, **unit.params))
-        print(f"{args.unit}: {len(next(iter(inputs.values())))} rows -> {args.out}")
+        check_output_path(args.out)
+        out = MODELS[args.unit].run(inputs, **unit.params) if rows(inputs) else \
+            {f.name: [] for f in unit.outputs}
+        write_outputs(unit, args.out, out)
+        culled = raster.culled(inputs) if unit.status_ports else None
+        print(f"{args.unit} (golden model): {summary(unit, inputs, out, culled)} -> {args.out}")
 
 
 if __name__ == "__main__":

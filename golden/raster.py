@@ -16,13 +16,23 @@ from hdl.setup_unit.formats import EDGE, VALUE, coord, parse_modes
 
 from . import quadratic as q
 
-__all__ = ["coverage", "run", "channel_uv", "sorted_triangles"]
+__all__ = ["coverage", "culled", "run", "channel_uv", "sorted_triangles"]
 
 
 def _vertices(inputs):
     x = np.stack([np.asarray(inputs[f"x{k}"], np.int64) for k in range(3)], -1)
     y = np.stack([np.asarray(inputs[f"y{k}"], np.int64) for k in range(3)], -1)
     return x, y
+
+
+def _area2(x, y):
+    """Twice the signed area of each triangle (Omega, seed 002 eq 47), sub-pixel units."""
+    return (x[:, 1] - x[:, 0]) * (y[:, 2] - y[:, 0]) - (x[:, 2] - x[:, 0]) * (y[:, 1] - y[:, 0])
+
+
+def culled(inputs):
+    """How many triangles the setup drops as degenerate (Omega = 0)."""
+    return int(np.sum(_area2(*_vertices(inputs)) == 0))
 
 
 def coverage(x, y, sub_bits, screen_bits):

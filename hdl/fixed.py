@@ -106,15 +106,13 @@ def check_arrays(fields, arrays, *, where="input"):
                                  f"{int(np.flatnonzero(frac)[0])} is {a[frac][0]!r}")
         elif a.dtype.kind not in "iub":
             raise FieldError(f"{where}: field {f.name!r} has dtype {a.dtype}, not integers")
-        if a.dtype.kind == "u" and a.dtype.itemsize == 8 and a.size and a.max() > 2**62:
-            raise FieldError(f"{where}: field {f.name!r} has value {a.max()} out of range")
-        a = a.astype(np.int64)
-        bad = (a < f.fmt.min) | (a > f.fmt.max)
+        bad = (a < f.fmt.min) | (a > f.fmt.max)             # in the user's own dtype
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
             kind = "s" if f.fmt.signed else "u"
             raise FieldError(f"{where}: field {f.name!r} ({kind}{f.fmt.width}, range "
-                             f"{f.fmt.min}..{f.fmt.max}) has {a[row]} at row {row}")
+                             f"{f.fmt.min}..{f.fmt.max}) has {a[row].item()!r} at row {row}")
+        a = a.astype(np.int64)
         if n is not None and len(a) != n:
             raise FieldError(f"{where}: field {f.name!r} has {len(a)} rows, others have {n}")
         n = len(a)

@@ -2,7 +2,9 @@
 
 A unit subclasses :class:`Unit` and supplies
 
-- ``NAME``, ``PARAMS`` (``{name: default}``), and the ``inputs``/``outputs`` field lists;
+- ``NAME``, ``PARAMS`` (``{name: default}``), ``RANGES`` (``{name: (lo, hi)}`` for an
+  integer, ``{name: ("a", "b")}`` for a choice; booleans need none), and the
+  ``inputs``/``outputs`` field lists;
 - ``latency``, the register stages from an accepted input to its output;
 - ``datapath(p, v)``: given a :class:`Pipeline` and a dict of named values available at the
   current stage, add stages and return the dict at the last one.
@@ -20,7 +22,7 @@ from amaranth.lib.wiring import In, Out
 
 from .fixed import layout
 
-__all__ = ["Pipeline", "Unit", "check_int", "check_bool"]
+__all__ = ["Pipeline", "Unit", "check_int", "check_bool", "check_param", "param_range"]
 
 
 def check_int(name, value, lo, hi):
@@ -37,6 +39,35 @@ def check_bool(name, value):
     if not isinstance(value, bool):
         raise TypeError(f"{name} must be True or False, not {value!r}")
     return value
+
+
+def check_param(name, value, default, allowed, per_channel=False):
+    """One constructor parameter against its default's type and its ``RANGES`` entry."""
+    if isinstance(default, bool):
+        return check_bool(name, value)
+    if isinstance(default, int):
+        return check_int(name, value, *allowed)
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a string, not {value!r}")
+    parts = [v.strip() for v in value.split(",")] if per_channel else [value]
+    for part in parts:
+        if part not in allowed:
+            each = " (one per channel)" if per_channel else ""
+            raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))}{each}, "
+                             f"not {part!r}")
+    return value
+
+
+def param_range(default, allowed, per_channel=False):
+    """A parameter's range or choices, for ``sim units --json``."""
+    if isinstance(default, bool):
+        return {"choices": [False, True]}
+    if isinstance(default, int):
+        return {"min": allowed[0], "max": allowed[1]}
+    out = {"choices": list(allowed)}
+    if per_channel:
+        out["per_channel"] = "a comma-separated list, one per channel (one name applies to all)"
+    return out
 
 
 class Pipeline:
@@ -87,6 +118,8 @@ class Pipeline:
 class Unit(wiring.Component):
     NAME = None
     PARAMS = {}
+    RANGES = {}
+    PER_CHANNEL = ()       # string parameters that list one choice per channel
     DOC = ""
 
     def __init__(self, **params):
@@ -97,6 +130,9 @@ class Unit(wiring.Component):
                 raise TypeError(f"{self.NAME}: unknown parameter(s) "
                                 f"{', '.join(sorted(unknown))}; "
                                 f"known: {', '.join(self.PARAMS) or 'none'}")
+            for name, default in self.PARAMS.items():
+                check_param(name, self.params[name], default, self.RANGES.get(name),
+                            name in self.PER_CHANNEL)
             self.validate(**self.params)
         except (TypeError, ValueError):
             self._MustUse__silence = True      # never built, so never to be elaborated
@@ -118,7 +154,13 @@ class Unit(wiring.Component):
         return unit
 
     def validate(self, **params):
-        """Check constructor parameters; raise ``TypeError``/``ValueError`` naming the problem."""
+        """Checks beyond ``RANGES`` (parameters that depend on each other); raise
+        ``TypeError``/``ValueError`` naming the problem."""
+
+    @classmethod
+    def param_ranges(cls):
+        return {name: param_range(default, cls.RANGES.get(name), name in cls.PER_CHANNEL)
+                for name, default in cls.PARAMS.items()}
 
     inputs = ()
     outputs = ()
@@ -141,4 +183,35 @@ class Unit(wiring.Component):
         m.d.comb += self.o.valid.eq(p.valid)
         for f in self.outputs:
             m.d.comb += self.o.payload[f.name].eq(v[f.name])
+        return m
+
+
+class NamedPorts(wiring.Component):
+    """A unit with one port per field, for export: ``i_<field>`` and ``o_<field>`` beside
+    ``i_valid``, ``i_ready``, ``o_valid`` and ``o_ready`` (and the unit's status ports), so a
+    user wires it up without decoding a packed payload. The unit itself is the submodule
+    ``core``."""
+
+    def __init__(self, unit):
+        self.unit = unit
+        members = {"i_valid": In(1), "i_ready": Out(1)}
+        members.update({f"i_{f.name}": In(f.fmt.shape) for f in unit.inputs})
+        members.update({"o_valid": Out(1), "o_ready": In(1)})
+        members.update({f"o_{f.name}": Out(f.fmt.shape) for f in unit.outputs})
+        clash = set(members) & set(unit.status_ports)
+        if clash:
+            raise ValueError(f"{unit.NAME}: status port(s) {sorted(clash)} clash with fields")
+        members.update(unit.status_ports)
+        super().__init__(members)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.core = unit = self.unit
+        m.d.comb += [unit.i.valid.eq(self.i_valid), self.i_ready.eq(unit.i.ready),
+                     self.o_valid.eq(unit.o.valid), unit.o.ready.eq(self.o_ready)]
+        m.d.comb += [unit.i.payload[f.name].eq(getattr(self, f"i_{f.name}"))
+                     for f in unit.inputs]
+        m.d.comb += [getattr(self, f"o_{f.name}").eq(unit.o.payload[f.name])
+                     for f in unit.outputs]
+        m.d.comb += [getattr(self, name).eq(getattr(unit, name)) for name in unit.status_ports]
         return m

@@ -53,6 +53,7 @@ def make_unit(name, *, spec=False, **params) -> Unit:
 def describe(name):
     unit = UNITS[name].spec()
     return {"name": name, "doc": unit.DOC, "params": dict(unit.PARAMS),
+            "param_ranges": unit.param_ranges(),
             "latency": unit.latency,
             "inputs": [f.describe() for f in unit.inputs],
             "outputs": [f.describe() for f in unit.outputs]}

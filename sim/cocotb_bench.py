@@ -1,9 +1,11 @@
 """The cocotb test bench every unit runs under (Icarus or Verilator).
 
-It reads the vectors and the port layout from the files that ``sim.cocotb_run`` names in the
-environment, streams them with the same :class:`sim.stream.Traffic` as the Amaranth bench, and
-writes what came out. Inputs change on the falling edge; handshakes are sampled in the
-read-only phase before the rising edge, which is race-free on both simulators.
+It drives the exported Verilog's named ports (``i_<field>``, ``o_<field>``, ``i_valid`` ...,
+see ``build/verilog/<unit>.json``), reads the vectors and the field list from the files that
+``sim.cocotb_run`` names in the environment, streams them with the same
+:class:`sim.stream.Traffic` as the Amaranth bench, and writes what came out. Inputs change on
+the falling edge; handshakes are sampled in the read-only phase before the rising edge, which
+is race-free on both simulators.
 """
 import json
 import os
@@ -13,37 +15,55 @@ import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge
 
-from sim.stream import Traffic, pack, unpack
+from sim.progress import report_to
+from sim.stream import Traffic
 
 
 @cocotb.test()
 async def stream_vectors(dut):
-    spec = json.loads(open(os.environ["SHADE_SPEC"]).read())
-    inputs = dict(np.load(os.environ["SHADE_IN"]))
-    traffic = Traffic(pack(spec["inputs"], inputs), p_valid=spec["p_valid"],
-                      p_ready=spec["p_ready"], seed=spec["seed"], many=spec["many"])
+    with open(os.environ["SHADE_SPEC"]) as f:
+        spec = json.load(f)
+    fin, fout = spec["inputs"], spec["outputs"]
+    with np.load(os.environ["SHADE_IN"]) as z:     # raw two's complement -> port bits
+        cols = [(z[f["name"]] & ((1 << f["width"]) - 1)).tolist() for f in fin]
+    rows = list(zip(*cols))
+    traffic = Traffic(list(range(len(rows))), p_valid=spec["p_valid"], p_ready=spec["p_ready"],
+                      seed=spec["seed"], many=spec["many"],
+                      progress=report_to(os.environ["SHADE_PROGRESS"]))
     busy = dut.busy if spec["many"] else None
+    in_ports = [getattr(dut, f"i_{f['name']}") for f in fin]
+    out_ports = [getattr(dut, f"o_{f['name']}") for f in fout]
     Clock(dut.clk, 10, unit="ns").start()
     dut.rst.value = 1
-    dut.i__valid.value = 0
-    dut.i__payload.value = 0
-    dut.o__ready.value = 0
+    dut.i_valid.value = 0
+    dut.o_ready.value = 0
+    for port in in_ports:
+        port.value = 0
     for _ in range(2):
         await RisingEdge(dut.clk)
     await FallingEdge(dut.clk)
     dut.rst.value = 0
-    i_valid, i_payload, o_ready = dut.i__valid, dut.i__payload, dut.o__ready
-    i_ready, o_valid, o_payload = dut.i__ready, dut.o__valid, dut.o__payload
+    i_valid, o_ready, i_ready, o_valid = dut.i_valid, dut.o_ready, dut.i_ready, dut.o_valid
+    offered = None
     while not traffic.done:
         await FallingEdge(dut.clk)
-        valid, payload, ready = traffic.drive()
+        valid, row, ready = traffic.drive()
         i_valid.value = valid
-        i_payload.value = payload
+        if valid and row != offered:                 # a new row: set its fields
+            offered = row
+            for port, value in zip(in_ports, rows[row]):
+                port.value = value
         o_ready.value = ready
         await ReadOnly()
         ov = int(o_valid.value)
-        traffic.edge(int(i_ready.value), ov, o_payload.value.to_unsigned() if ov else 0,
-                     int(busy.value) if busy is not None else None)
+        got = tuple(int(p.value) for p in out_ports) if ov and ready else 0
+        traffic.edge(int(i_ready.value), ov, got, int(busy.value) if busy is not None else None)
+    out = {}
+    for k, f in enumerate(fout):
+        col = np.array([row[k] for row in traffic.out], dtype=np.int64)
+        if f["signed"]:
+            col = np.where(col >> (f["width"] - 1) & 1, col - (1 << f["width"]), col)
+        out[f["name"]] = col
     status = {"culled": int(dut.culled.value)} if spec["many"] else {}
     np.savez(os.environ["SHADE_OUT"], latency=traffic.latency if traffic.latency is not None
-             else -1, cycles=traffic.cycles, **status, **unpack(spec["outputs"], traffic.out))
+             else -1, cycles=traffic.cycles, **status, **out)

@@ -1,21 +1,30 @@
 """Streaming vectors through a unit's exported Verilog with cocotb, on Icarus or Verilator.
 
-Each (unit, parameters, simulator, waves) is built once per process and reused.
+A model is built once and kept under ``build/cocotb/<simulator>/``, keyed by the hash of its
+Verilog, the build arguments and the tool versions: an unchanged unit is not built again, in
+this process or the next. A lock file keeps two processes from building the same model at once.
 """
+import fcntl
 import hashlib
 import json
 import os
 import shutil
+import sys
 import tempfile
+import time
+from contextlib import contextmanager
+from importlib.metadata import version
 from pathlib import Path
 
 import numpy as np
 
 from hdl.units import make_unit
 
+from .progress import watch
 from .verilog import BUILD, ROOT, export, verilator_env
 
 SIMULATORS = ("icarus", "verilator")
+VERILATOR_ARGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT", "-O2"]
 _built = {}
 
 
@@ -38,19 +47,36 @@ def available(simulator):
     raise ValueError(f"unknown simulator {simulator!r}; use amaranth, icarus or verilator")
 
 
-def _key(name, params):
-    text = json.dumps(params, sort_keys=True)
-    return f"{name}-{hashlib.sha1(text.encode()).hexdigest()[:8]}" if params else name
-
-
 def _env(simulator):
     env = verilator_env() if simulator == "verilator" else dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
     return env
 
 
+@contextmanager
+def _environ(env):
+    saved = dict(os.environ)
+    os.environ.update(env)
+    try:
+        yield
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
+
+
+@contextmanager
+def _locked(path):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
 def build(name, params, simulator, *, waves=False):
-    """Build (once) and return ``(runner, build_dir)``."""
+    """Build (or find in the cache) and return ``(runner, build_dir)``."""
     reason = available(simulator)
     if reason:
         raise SimulatorMissing(reason)
@@ -58,71 +84,80 @@ def build(name, params, simulator, *, waves=False):
     if key in _built:
         return _built[key]
     from cocotb_tools.runner import get_runner
-    base = BUILD / "cocotb" / simulator / (_key(name, params) + ("-waves" if waves else ""))
-    src = export(name, params, base)
-    build_dir = base / "obj"       # built from scratch: stale Verilator objects break make
-    saved = dict(os.environ)
-    os.environ.update(_env(simulator))
-    try:
-        runner = get_runner(simulator)
-        args = []
-        if simulator == "verilator":
-            args = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT", "-O2"]
-        runner.build(sources=[src], hdl_toplevel=name, build_dir=build_dir, build_args=args,
-                     timescale=("1ns", "1ps"), waves=waves, always=True, clean=True,
-                     log_file=base / "build.log")
-    finally:
-        os.environ.clear()
-        os.environ.update(saved)
+    tag = hashlib.sha1(json.dumps(params, sort_keys=True).encode()).hexdigest()[:8]
+    base = BUILD / "cocotb" / simulator / (f"{name}-{tag}" + ("-waves" if waves else ""))
+    build_dir = base / "obj"
+    args = VERILATOR_ARGS if simulator == "verilator" else []
+    with _locked(base.parent / f"{base.name}.lock"):
+        src = export(name, params, base)
+        tools = [version("cocotb")] + ([version("verilator")] if simulator == "verilator" else [])
+        stamp = hashlib.sha1(json.dumps([src.read_text(), args, tools]).encode()).hexdigest()
+        with _environ(_env(simulator)):
+            runner = get_runner(simulator)
+            if (build_dir / "stamp").exists() and (build_dir / "stamp").read_text() == stamp:
+                pass                                     # built before, from the same Verilog
+            else:
+                t0 = time.time()
+                print(f"{name}: building the {simulator} model (once; cached under {base})",
+                      file=sys.stderr, flush=True)
+                runner.build(sources=[src], hdl_toplevel=name, build_dir=build_dir,
+                             build_args=args, timescale=("1ns", "1ps"), waves=waves,
+                             always=True, clean=True, log_file=base / "build.log")
+                (build_dir / "stamp").write_text(stamp)
+                print(f"{name}: {simulator} model built in {time.time() - t0:.1f} s",
+                      file=sys.stderr, flush=True)
     _built[key] = (runner, build_dir)
     return _built[key]
 
 
+def _log_tail(path):
+    return path.read_text()[-3000:] if path.exists() else ""
+
+
 def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=0,
-               waves=False):
+               waves=None, progress=None):
     """Run every row of ``inputs`` through the Verilog of unit ``name``.
 
+    ``waves``: a path without suffix; the simulator's trace (FST from Icarus, VCD from
+    Verilator) is moved there. ``progress``: called as ``progress(sent, outputs)``.
     Returns ``(outputs, info)`` with ``info = {"latency", "cycles", "waves"}``.
     """
-    runner, build_dir = build(name, params, simulator, waves=waves)
+    runner, build_dir = build(name, params, simulator, waves=bool(waves))
     unit = make_unit(name, spec=True, **params)
     spec = {"inputs": [f.describe() for f in unit.inputs],
             "outputs": [f.describe() for f in unit.outputs],
             "p_valid": p_valid, "p_ready": p_ready, "seed": seed,
             "many": bool(unit.status_ports)}
-    with tempfile.TemporaryDirectory(dir=build_dir) as tmp:
+    with tempfile.TemporaryDirectory(dir=build_dir.parent) as tmp:
         tmp = Path(tmp)
         (tmp / "spec.json").write_text(json.dumps(spec))
         np.savez(tmp / "in.npz", **{f["name"]: np.asarray(inputs[f["name"]], np.int64)
                                     for f in spec["inputs"]})
         env = {"SHADE_SPEC": str(tmp / "spec.json"), "SHADE_IN": str(tmp / "in.npz"),
-               "SHADE_OUT": str(tmp / "out.npz"), "PYTHONPATH": _env(simulator)["PYTHONPATH"]}
-        saved = dict(os.environ)
-        os.environ.update(_env(simulator))
-        try:
-            runner.test(test_module="sim.cocotb_bench", hdl_toplevel=name,
-                        build_dir=build_dir, test_dir=tmp, extra_env=env, waves=waves,
-                        results_xml=str(tmp / "results.xml"), log_file=tmp / "sim.log",
-                        timescale=("1ns", "1ps"))
-        except SystemExit:             # the runner exits when the bench fails: say why
-            log = (tmp / "sim.log").read_text()[-3000:] if (tmp / "sim.log").exists() else ""
-            raise RuntimeError(f"cocotb run of {name} on {simulator} failed:\n{log}") from None
-        finally:
-            os.environ.clear()
-            os.environ.update(saved)
+               "SHADE_OUT": str(tmp / "out.npz"), "SHADE_PROGRESS": str(tmp / "progress"),
+               "PYTHONPATH": _env(simulator)["PYTHONPATH"]}
+        with _environ(_env(simulator)), watch(tmp / "progress", progress or (lambda *_: None)):
+            try:
+                runner.test(test_module="sim.cocotb_bench", hdl_toplevel=name,
+                            hdl_toplevel_lang="verilog",
+                            build_dir=build_dir, test_dir=tmp, extra_env=env,
+                            waves=bool(waves), results_xml=str(tmp / "results.xml"),
+                            log_file=tmp / "sim.log", timescale=("1ns", "1ps"))
+            except SystemExit:         # the runner exits when the bench fails: say why
+                raise RuntimeError(f"cocotb run of {name} on {simulator} failed:\n"
+                                   f"{_log_tail(tmp / 'sim.log')}") from None
         if not (tmp / "out.npz").exists():
-            log = (tmp / "sim.log").read_text()[-3000:] if (tmp / "sim.log").exists() else ""
-            raise RuntimeError(f"cocotb run of {name} on {simulator} produced no output:\n{log}")
+            raise RuntimeError(f"cocotb run of {name} on {simulator} produced no output:\n"
+                               f"{_log_tail(tmp / 'sim.log')}")
         got = dict(np.load(tmp / "out.npz"))
         wave = None
         if waves:
-            for pattern in ("*.fst", "*.vcd"):
-                found = sorted(tmp.glob(pattern)) + sorted(build_dir.glob(pattern))
-                if found:
-                    wave = BUILD / "sim" / simulator / f"{name}{found[0].suffix}"
-                    wave.parent.mkdir(parents=True, exist_ok=True)
-                    shutil.copy(found[0], wave)
-                    break
+            found = [f for pattern in ("*.fst", "*.vcd")
+                     for f in sorted(tmp.glob(pattern)) + sorted(build_dir.glob(pattern))]
+            if found:
+                wave = Path(waves).with_suffix(found[0].suffix)
+                wave.parent.mkdir(parents=True, exist_ok=True)
+                shutil.move(found[0], wave)
     info = {"latency": int(got.pop("latency")), "cycles": int(got.pop("cycles")), "waves": wave}
     if "culled" in got:
         info["culled"] = int(got.pop("culled"))

@@ -1,4 +1,5 @@
 """Verilog export of registered units, and Verilator lint."""
+import json
 import os
 import subprocess
 import sys
@@ -6,6 +7,7 @@ from pathlib import Path
 
 from amaranth.back import verilog
 
+from hdl.unit import NamedPorts
 from hdl.units import make_unit
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -30,15 +32,51 @@ LINT_ACCEPTED = {
 
 
 def export(name, params=None, out_dir=None):
-    """Write ``<out_dir>/<name>.v`` for a unit (top module named ``name``); returns the path."""
+    """Write ``<out_dir>/<name>.v`` for a unit, with one port per field (top module ``name``,
+    the unit itself as ``<name>.core``), and ``<name>.json``, its field map; returns the
+    Verilog's path. Files whose text is unchanged are not rewritten."""
     unit = make_unit(name, **(params or {}))
     out_dir = Path(out_dir or BUILD / "verilog")
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / f"{name}.v"
-    text = verilog.convert(unit, name=name, emit_src=False)
+    _write(path, verilog.convert(NamedPorts(unit), name=name, emit_src=False))
+    _write(path.with_suffix(".json"), json.dumps(field_map(unit), indent=2) + "\n")
+    return path
+
+
+def field_map(unit):
+    """The ports of a unit's exported Verilog: name, direction, width, signedness, scale."""
+    ports = [{"port": "clk", "direction": "input", "width": 1, "role": "clock, rising edge"},
+             {"port": "rst", "direction": "input", "width": 1,
+              "role": "synchronous reset, active high"}]
+    for side, fields, direction in (("i", unit.inputs, "input"), ("o", unit.outputs, "output")):
+        back = "output" if direction == "input" else "input"
+        ports.append({"port": f"{side}_valid", "direction": direction, "width": 1,
+                      "role": f"stream {side}: the fields below are valid"})
+        ports.append({"port": f"{side}_ready", "direction": back, "width": 1,
+                      "role": f"stream {side}: a transfer happens when valid and ready are high"})
+        ports += [{"port": f"{side}_{f.name}", "direction": direction, "field": f.name,
+                   **f.fmt.describe(), "value": _meaning(f.fmt)}
+                  for f in fields]
+    for name in unit.status_ports:
+        ports.append({"port": name, "direction": "output", "width": len(getattr(unit, name)),
+                      "role": STATUS_ROLES.get(name, "status")})
+    return {"module": unit.NAME, "params": dict(unit.params), "latency": unit.latency,
+            "one_row_per_clock": True, "ports": ports}
+
+
+def _meaning(fmt):
+    scale = f"raw / 2^{fmt.frac_bits}" if fmt.frac_bits else "raw"
+    return scale if fmt.unit == "1" else f"{scale}, in {fmt.unit}"
+
+
+STATUS_ROLES = {"busy": "work in flight (inputs accepted whose outputs have not all left)",
+                "culled": "count of degenerate triangles dropped since reset"}
+
+
+def _write(path, text):
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
-    return path
 
 
 def verilator_env():

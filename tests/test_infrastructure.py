@@ -88,6 +88,8 @@ def test_registry_json_contract():
         assert set(unit) >= {"name", "params", "inputs", "outputs"}
         for f in unit["inputs"] + unit["outputs"]:
             assert set(f) == {"name", "width", "signed", "frac_bits", "unit"}
+    for unit in units:
+        assert set(unit["param_ranges"]) == set(unit["params"])
     names = {u["name"] for u in units}
     assert names == {"texel_decode", "fenney_power", "fenney_dot", "fenney_xz", "fenney_polar",
                      "illum", "rotation", "bump_polar", "raster"}
@@ -132,12 +134,58 @@ def test_fixed_formats():
 
 @pytest.mark.parametrize("name", list(UNITS))
 def test_verilog_exports_lint_clean(name, tmp_path):
+    """One port per field, named after it, and a field map beside the Verilog that lists
+    every port of the top module with its width, signedness and scale."""
     path = export(name, None, tmp_path)
     text = path.read_text()
-    assert f"module {name}(" in text
-    for port in ("i__payload", "i__valid", "i__ready", "o__payload", "o__valid", "o__ready"):
-        assert port in text
+    header = text[text.index(f"module {name}("):]
+    header = header[:header.index(");")]
+    unit = make_unit(name, spec=True)
+    ports = {"clk", "rst", "i_valid", "i_ready", "o_valid", "o_ready",
+             *(f"i_{f.name}" for f in unit.inputs), *(f"o_{f.name}" for f in unit.outputs),
+             *unit.status_ports}
+    assert set("".join(header[header.index("(") + 1:].split()).split(",")) == ports
+    fmap = json.loads(path.with_suffix(".json").read_text())
+    assert {p["port"] for p in fmap["ports"]} == ports
+    assert fmap["latency"] == unit.latency
+    for f in unit.inputs:
+        entry = next(p for p in fmap["ports"] if p["port"] == f"i_{f.name}")
+        assert (entry["width"], entry["signed"], entry["frac_bits"]) == \
+            (f.fmt.width, f.fmt.signed, f.fmt.frac_bits)
+        width = f"[{f.fmt.width - 1}:0] " if f.fmt.width > 1 else ""
+        assert f"input {width}i_{f.name};" in text
     lint(path, name)            # raises on any warning we have not accepted by name
+
+
+def test_param_ranges_are_enforced_and_described():
+    """The ranges ``sim units --json`` shows are the ones the constructors enforce (the
+    rotation's asin table needs asin_bits <= trig_bits + 1: set the other one to allow it)."""
+    for name, cls in UNITS.items():
+        ranges = describe(name)["param_ranges"]
+        assert set(ranges) == set(cls.PARAMS)
+        for key, r in ranges.items():
+            other = {"trig_bits": {"asin_bits": 4}, "asin_bits": {"trig_bits": 16}}.get(key, {}) \
+                if "asin_bits" in cls.PARAMS else {}
+            if "min" in r:
+                make_unit(name, spec=True, **other, **{key: r["min"]})
+                make_unit(name, spec=True, **other, **{key: r["max"]})
+                with pytest.raises(ParamError, match=key):
+                    make_unit(name, spec=True, **other, **{key: r["max"] + 1})
+                with pytest.raises(ParamError, match=key):
+                    make_unit(name, spec=True, **other, **{key: r["min"] - 1})
+            else:
+                for choice in r["choices"]:
+                    make_unit(name, spec=True, **{key: choice})
+                with pytest.raises(ParamError, match=key):
+                    make_unit(name, spec=True, **{key: "nonsense"})
+
+
+@pytest.mark.parametrize("name", list(UNITS))
+def test_vectors_n_means_n(name):
+    from golden import MODELS
+    for n in (0, 3, 2000):
+        got = MODELS[name].vectors(np.random.default_rng(0), n)
+        assert {len(v) for v in got.values()} == {n}
 
 
 @pytest.mark.xdist_group("grouping-check")

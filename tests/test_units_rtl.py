@@ -43,7 +43,7 @@ def test_backpressure(simulator, name, params):
 def test_one_per_clock(simulator, name, params):
     """With valid and ready held high, n rows take n + latency cycles, and the first output
     appears exactly ``latency`` cycles after the first input."""
-    inputs = MODELS[name].vectors(np.random.default_rng(1), 500, **params_of(name, params))
+    inputs = MODELS[name].vectors(np.random.default_rng(1), 2000, **params_of(name, params))
     n = len(next(iter(inputs.values())))
     out, info = stream(name, inputs, simulator, params)
     latency = UNITS[name].spec(**params).latency

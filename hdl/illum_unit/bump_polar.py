@@ -18,6 +18,7 @@ class BumpPolar(Unit):
     NAME = "bump_polar"
     DOC = "Angular bump mapping: two rotations and the law-of-cosines illumination (seed 003)"
     PARAMS = {**Rotation.PARAMS, "table_bits": 10, "shininess": 16}
+    RANGES = {**{k: Illum.RANGES[k] for k in ("table_bits", "shininess")}, **Rotation.RANGES}
 
     def validate(self, **params):
         self.rotation = Rotation.spec(**{k: params[k] for k in ROTATION_PARAMS})

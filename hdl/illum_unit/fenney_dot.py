@@ -31,7 +31,7 @@ from amaranth.hdl import Mux
 
 from ..fixed import Field, s, u
 from ..lut import build_lut, rom
-from ..unit import Unit, check_bool, check_int
+from ..unit import Unit
 
 G_FRAC = 29                  # g = 2**29 / (127 * |b|)
 D_FRAC = 14                  # dq = d * 2**14
@@ -53,15 +53,12 @@ class FenneyDot(Unit):
     NAME = "fenney_dot"
     DOC = "Fenney bump . light dot product, weighted by h (US 6,819,319 eq 1)"
     PARAMS = {"normalize": False, "rsqrt_bits": 12}
+    RANGES = {"rsqrt_bits": (4, 16)}
     inputs = (Field("x", s(9, unit="1/255")), Field("y", u(8, unit="1/255")),
               Field("z", s(9, unit="1/255")),
               Field("lx", s(8, unit="1/127")), Field("ly", s(8, unit="1/127")),
               Field("lz", s(8, unit="1/127")), Field("h", u(8, unit="1/255")))
     outputs = (Field("x", u(10, 10)),)
-
-    def validate(self, normalize, rsqrt_bits):
-        check_bool("normalize", normalize)
-        check_int("rsqrt_bits", rsqrt_bits, 4, 16)
 
     @property
     def latency(self):

@@ -23,7 +23,7 @@ from amaranth.hdl import Mux
 from ..fixed import Field, u
 from ..lut import quarter_cos_lut, rom
 from ..trig import cos_lookup
-from ..unit import Unit, check_int
+from ..unit import Unit
 from .fenney_power import FenneyPower
 
 
@@ -38,8 +38,9 @@ class FenneyPolar(Unit):
               Field("c", u(8, 8)))
     outputs = (Field("intensity", u(8, unit="1/255")), Field("shade", u(10, 10)))
 
+    RANGES = {"trig_bits": (4, 16)}
+
     def validate(self, trig_bits):
-        check_int("trig_bits", trig_bits, 4, 16)
         self.power = FenneyPower.spec()
 
     @property

@@ -11,6 +11,7 @@ class FenneyXZ(Unit):
     NAME = "fenney_xz"
     DOC = "Fenney X/Z bump shading: decode, dot, power (US 6,819,319, second embodiment)"
     PARAMS = FenneyDot.PARAMS
+    RANGES = FenneyDot.RANGES
     inputs = (TexelDecode.inputs
               + tuple(f for f in FenneyDot.inputs if f.name in ("lx", "ly", "lz", "h"))
               + tuple(f for f in FenneyPower.inputs if f.name == "c"))

@@ -19,7 +19,7 @@ from amaranth.hdl import Mux
 from ..fixed import Field, binary_angle, u
 from ..lut import build_lut, quarter_cos_lut, rom
 from ..trig import cos_lookup, signed_cos
-from ..unit import Unit, check_int
+from ..unit import Unit
 
 OUT_FRAC = 15                          # dot, diffuse and specular: 1.0 = 2**15
 
@@ -37,11 +37,8 @@ class Illum(Unit):
     PARAMS = {"angle_bits": 10, "trig_bits": 14, "table_bits": 10, "shininess": 16}
     latency = 5
 
-    def validate(self, angle_bits, trig_bits, table_bits, shininess):
-        check_int("angle_bits", angle_bits, 4, 16)
-        check_int("trig_bits", trig_bits, 8, 16)
-        check_int("table_bits", table_bits, 4, 14)
-        check_int("shininess", shininess, 1, 1024)
+    RANGES = {"angle_bits": (4, 16), "trig_bits": (8, 16), "table_bits": (4, 14),
+              "shininess": (1, 1024)}
 
     def angle(self, name):
         return Field(name, binary_angle(self.params["angle_bits"]))

@@ -31,7 +31,7 @@ from amaranth.hdl import Mux
 from ..fixed import Field, Fixed, binary_angle, u
 from ..lut import build_lut, float_address, float_bins, quarter_cos_lut, rom
 from ..trig import cos_lookup, signed_cos
-from ..unit import Unit, check_int
+from ..unit import Unit
 
 RECIP_FRAC = 16          # 1/(2 sin a) and 1/(2 cos a): 16 fraction bits
 PROP_FRAC = 16           # theta_prop: 1.0 = 2**16
@@ -77,14 +77,13 @@ class Rotation(Unit):
     PARAMS = {"method": "paper", "angle_bits": 12, "trig_bits": 14, "asin_bits": 12,
               "atan_bits": 8, "prop_bits": 12}
 
+    RANGES = {"method": ("paper", "exact"), "angle_bits": (6, 16), "trig_bits": (8, 16),
+              "asin_bits": (4, 16), "atan_bits": (2, 10), "prop_bits": (4, 16)}
+
     def validate(self, method, angle_bits, trig_bits, asin_bits, atan_bits, prop_bits):
-        if method not in ("paper", "exact"):
-            raise ValueError(f"method must be 'paper' or 'exact', not {method!r}")
-        check_int("angle_bits", angle_bits, 6, 16)
-        check_int("trig_bits", trig_bits, 8, 16)
-        check_int("asin_bits", asin_bits, 4, min(trig_bits + 1, 16))
-        check_int("atan_bits", atan_bits, 2, 10)
-        check_int("prop_bits", prop_bits, 4, 16)
+        if asin_bits > trig_bits + 1:
+            raise ValueError(f"asin_bits must be at most trig_bits + 1 = {trig_bits + 1}, "
+                             f"not {asin_bits}")
 
     def angle(self, name):
         return Field(name, binary_angle(self.params["angle_bits"]))

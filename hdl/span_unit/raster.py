@@ -9,9 +9,9 @@ while it walks the previous triangles. Status outputs: ``busy`` (work in flight)
 from amaranth.hdl import Module, Signal
 from amaranth.lib.wiring import Out
 
-from ..setup_unit.formats import fragment_fields, parse_modes, triangle_fields
+from ..setup_unit.formats import MODES, fragment_fields, parse_modes, triangle_fields
 from ..setup_unit.setup import Setup, setup_fields
-from ..unit import Pipeline, Unit, check_int
+from ..unit import Pipeline, Unit
 from .span import ROW_EVAL_STAGES, Link, row_eval, stepper, walker
 
 __all__ = ["Raster"]
@@ -23,16 +23,13 @@ class Raster(Unit):
            "forward-difference span engine; many fragments per triangle")
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
               "recip": "newton", "recip_iters": 2}
+    RANGES = {"screen_bits": (4, 12), "sub_bits": (1, 8), "channels": (1, 8), "modes": MODES,
+              "recip": ("newton", "divide"), "recip_iters": (0, 3)}
+    PER_CHANNEL = ("modes",)
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters):
-        check_int("screen_bits", screen_bits, 4, 12)
-        check_int("sub_bits", sub_bits, 1, 8)
-        check_int("channels", channels, 1, 8)
         parse_modes(modes, channels)
-        if recip not in ("newton", "divide"):
-            raise ValueError(f"recip must be 'newton' or 'divide', not {recip!r}")
-        check_int("recip_iters", recip_iters, 0, 3)
 
     @property
     def setup(self):
