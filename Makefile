@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup test verilog sim report accuracy clean
+.PHONY: setup test verilog sim report accuracy recip-cost clean
 
 setup: $(STAMP)
 
@@ -43,6 +43,10 @@ report: setup
 # Method errors (Fenney units, seed 003's rotation) with plots in build/accuracy/.
 accuracy: setup
 	$(PY) -m golden.accuracy
+
+# The setup's reciprocal: Newton-Raphson steps or the divider, clocks against accuracy.
+recip-cost: setup
+	$(PY) -m sim.recip_cost
 
 clean:
 	rm -rf build .pytest_cache .hypothesis results.xml sim_build

@@ -20,7 +20,7 @@ from hdl.setup_unit.formats import EDGE, VALUE
 
 from . import angular, fenney, raster
 
-__all__ = ["MODELS", "Model", "raster_hard_cases", "random_triangles"]
+__all__ = ["MODELS", "Model", "TYPICAL_SIZE", "raster_hard_cases", "random_triangles"]
 
 
 @dataclass(frozen=True)

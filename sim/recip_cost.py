@@ -2,21 +2,21 @@
 it (Newton-Raphson with 0-3 steps from a 256-entry seed, or the restoring divider), the setup
 latency in clocks, the largest relative error of 1/Omega's mantissa over every 16-bit mantissa
 (the same integer recurrences as the RTL, hdl/arith.py), and the largest fragment error the
-RTL shows against the float model on the same triangles (Amaranth's simulator).
+RTL shows against the float model on the same triangles.
 
-    python -m sim.recip_cost [--triangles N]
+    make recip-cost   (python -m sim.recip_cost [--triangles N] [--screen-bits B] [--simulator S])
 """
 import argparse
-import sys
 import time
 
 import numpy as np
 
-from golden import MODELS, random_triangles, raster_hard_cases
+from golden import MODELS, TYPICAL_SIZE, random_triangles, raster_hard_cases
 from hdl.arith import recip_seed
 from hdl.units import make_unit
 
-from .__main__ import simulate
+from .__main__ import SIMS, simulate
+from .cli_common import user_errors
 
 CONFIGS = [("newton", 0), ("newton", 1), ("newton", 2), ("newton", 3), ("divide", 0)]
 
@@ -38,31 +38,39 @@ def recip_error(method, iters, R=28, bits=16):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.recip_cost", description=__doc__.split("\n")[0])
-    ap.add_argument("--triangles", type=int, default=60)
+    ap = argparse.ArgumentParser(prog="python -m sim.recip_cost", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--triangles", type=int, default=200,
+                    help="random triangles of typical size after the hard cases (default 200)")
+    ap.add_argument("--screen-bits", type=int, default=7, help="screen 2^n pixels square (7)")
+    ap.add_argument("--simulator", choices=SIMS, default="verilator")
     args = ap.parse_args(argv)
-    base = {"screen_bits": 7}
-    params = make_unit("raster", spec=True, **base).params
-    hard, _ = raster_hard_cases(**params)
-    extra = random_triangles(np.random.default_rng(4), args.triangles, **params)
-    inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
-    print("| reciprocal | setup latency (clocks) | relative error of 1/m | max fragment error (LSB) "
-          "| fragments | sim time (s) |")
-    print("| --- | --- | --- | --- | --- | --- |")
-    for method, iters in CONFIGS:
-        p = {**base, "recip": method, "recip_iters": iters}
-        unit = make_unit("raster", spec=True, **p)
-        t0 = time.time()
-        print(f"{method} {iters}: simulating...", file=sys.stderr, flush=True)
-        out, info = simulate("raster", unit.params, inputs, "amaranth")
-        want = MODELS["raster"].run(inputs, **unit.params)
-        if len(out["tri"]) != len(want["tri"]):
-            err = float("inf")
-        else:
-            err = max(float(np.abs(out[k] - want[k]).max()) for k in want if k.startswith("v"))
-        label = "divider" if method == "divide" else f"Newton-Raphson, {iters} step(s)"
-        print(f"| {label} | {unit.setup.latency} | {recip_error(method, iters):.2e} | {err:.2f} "
-              f"| {len(out['tri'])} | {time.time() - t0:.0f} |", flush=True)
+    with user_errors():
+        base = {"screen_bits": args.screen_bits}
+        params = make_unit("raster", spec=True, **base).params
+        hard, _ = raster_hard_cases(**params)
+        extra = random_triangles(np.random.default_rng(4), args.triangles, **params,
+                                 size=TYPICAL_SIZE)
+        inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
+        side = 1 << args.screen_bits
+        print(f"raster on a {side} x {side} screen, {len(hard['x0'])} hard-case and "
+              f"{args.triangles} random triangles, on {args.simulator}")
+        print("| reciprocal | setup latency (clocks) | relative error of 1/m | max fragment "
+              "error (LSB) | fragments | sim time (s) |")
+        print("| --- | --- | --- | --- | --- | --- |")
+        for method, iters in CONFIGS:
+            unit = make_unit("raster", spec=True, **base, recip=method, recip_iters=iters)
+            label = "divider" if method == "divide" else f"Newton-Raphson, {iters} step(s)"
+            t0 = time.time()
+            out, info = simulate("raster", unit.params, inputs, args.simulator, progress=True)
+            want = MODELS["raster"].run(inputs, **unit.params)
+            if len(out["tri"]) != len(want["tri"]):
+                err = float("inf")
+            else:
+                err = max(float(np.abs(out[k] - want[k]).max()) for k in want
+                          if k.startswith("v"))
+            print(f"| {label} | {unit.setup.latency} | {recip_error(method, iters):.2e} | "
+                  f"{err:.2f} | {len(out['tri']):,} | {time.time() - t0:.0f} |", flush=True)
 
 
 if __name__ == "__main__":
