@@ -29,7 +29,7 @@ test: setup
 verilog: setup
 	$(PY) -m sim verilog
 
-# Golden vectors through the cocotb benches: make sim [UNIT=name] [SIM=icarus|verilator|amaranth]
+# Golden vectors through a simulator: make sim [UNIT=name] [SIM=icarus|cocotb-verilator|verilator|amaranth]
 # [VECTORS=n|all] [PARAM="name=value ..."] [WAVES=1]. A verdict per unit; with WAVES=1 a waveform
 # per unit in build/sim/<sim>/.
 sim: setup

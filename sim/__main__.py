@@ -23,39 +23,45 @@ from hdl.units import UNITS, describe, make_unit, parse_params
 
 from .cli_common import (UsageError, check_output_path, read_fields, read_inputs, rows,
                          summary, user_errors, write_outputs)
-
-SIMS = ("amaranth", "icarus", "verilator")
-
+from .simulators import SIMS, available
 
 def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=0,
              waves=None, progress=False):
-    """Run inputs through the RTL on any simulator; returns ``(outputs, info)``.
+    """Run inputs through the RTL on any simulator (``sim.simulators``); returns
+    ``(outputs, info)``.
 
-    ``waves``: a path without suffix for the trace (VCD from Amaranth and Verilator, FST from
-    Icarus). With ``progress``, a progress bar on stderr."""
+    ``waves``: a path without suffix for the trace (VCD from Amaranth and cocotb-Verilator,
+    FST from Icarus and the batch path). With ``progress``, a progress bar on stderr."""
+    reason = available(simulator)
+    if reason:
+        raise UsageError(f"{simulator}: {reason}")
     unit = make_unit(name, spec=True, **params)
     many = bool(unit.status_ports)
+    if simulator == "verilator":
+        from .batch import build as build_batch
+        build_batch(name, params, trace=bool(waves))              # before the progress bar
+    elif simulator != "amaranth":
+        from .cocotb_run import build
+        build(name, params, simulator, waves=bool(waves))
     bar = None
-    if simulator != "amaranth":
-        from .cocotb_run import SimulatorMissing, build, run_cocotb
-        try:
-            build(name, params, simulator, waves=bool(waves))     # before the progress bar
-        except SimulatorMissing as e:
-            raise UsageError(f"{simulator}: {e}") from None
     if progress:
         from .progress import Progress
         bar = Progress(f"{name} on {simulator}", rows(inputs), many,
                        "tri" if many else "row")
+    traffic = dict(p_valid=p_valid, p_ready=p_ready, seed=seed)
     try:
         if simulator == "amaranth":
             from .amaranth_run import run_amaranth
             vcd = waves and waves.with_suffix(".vcd")
-            out, traffic = run_amaranth(make_unit(name, **params), inputs, p_valid=p_valid,
-                                        p_ready=p_ready, seed=seed, vcd=vcd, progress=bar)
-            return out, {"latency": traffic.latency, "cycles": traffic.cycles, "waves": vcd,
-                         **getattr(traffic, "status", {})}
-        return run_cocotb(name, params, inputs, simulator, p_valid=p_valid, p_ready=p_ready,
-                          seed=seed, waves=waves, progress=bar)
+            out, tr = run_amaranth(make_unit(name, **params), inputs, vcd=vcd, progress=bar,
+                                   **traffic)
+            return out, {"latency": tr.latency, "cycles": tr.cycles, "waves": vcd,
+                         **getattr(tr, "status", {})}
+        if simulator == "verilator":
+            from .batch import run_batch
+            return run_batch(name, params, inputs, waves=waves, progress=bar, **traffic)
+        from .cocotb_run import run_cocotb
+        return run_cocotb(name, params, inputs, simulator, waves=waves, progress=bar, **traffic)
     finally:
         if bar:
             bar.close()
@@ -183,7 +189,9 @@ def main(argv=None):
     p.add_argument("unit", choices=sorted(UNITS))
     p.add_argument("--in", dest="inp", required=True)
     p.add_argument("--out", required=True)
-    p.add_argument("--simulator", choices=SIMS, default="amaranth")
+    p.add_argument("--simulator", choices=SIMS, default="amaranth",
+                   help="amaranth | icarus | cocotb-verilator (cocotb benches) | verilator "
+                        "(the fast batch path)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE")
     p = sub.add_parser("verilog", help="export and lint the Verilog of every unit")
     p.add_argument("--out")
@@ -193,7 +201,9 @@ def main(argv=None):
     p.add_argument("--unit", dest="unit_opt", choices=sorted(UNITS))
     p.add_argument("--in", dest="inp", help="inputs whose outputs --out holds")
     p.add_argument("--out", help="outputs to check (from sim run or your own simulation)")
-    p.add_argument("--simulator", choices=SIMS, default="icarus")
+    p.add_argument("--simulator", choices=SIMS, default="icarus",
+                   help="amaranth | icarus | cocotb-verilator (cocotb benches) | verilator "
+                        "(the fast batch path)")
     p.add_argument("--vectors", help="rows per unit (triangles for raster): hard cases first, "
                    "then random; 'all': the full sweep; default: 5,000 rows, 300 triangles")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE")

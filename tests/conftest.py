@@ -14,16 +14,16 @@ settings.load_profile("shading")
 from golden import MODELS
 from hdl.units import make_unit
 from sim.__main__ import simulate
-from sim.cocotb_run import available
+from sim.simulators import SIMS, available
 
 
 def _sim_param(name):
-    reason = None if name == "amaranth" else available(name)
+    reason = available(name)
     marks = [pytest.mark.skip(reason=f"{name} tests skipped: {reason}")] if reason else []
     return pytest.param(name, marks=marks, id=name)
 
 
-SIMULATORS = [_sim_param(s) for s in ("amaranth", "icarus", "verilator")]
+SIMULATORS = [_sim_param(s) for s in SIMS]
 
 
 def params_of(name, params=None):

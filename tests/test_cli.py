@@ -215,7 +215,7 @@ def test_params_apply_where_a_unit_has_them():
 def test_check_streams_n_rows_and_writes_waves_only_on_request():
     """``make sim``'s command: exactly n rows, a verdict line, a waveform only with --waves,
     and that waveform in one place (moved from the simulator's directory, not copied)."""
-    from sim.cocotb_run import available
+    from sim.simulators import available
     from sim.verilog import BUILD
     r = cli("sim", "check", "fenney_power", "--simulator", "amaranth", "--vectors", "20")
     assert r.returncode == 0, r.stderr
@@ -237,7 +237,7 @@ def test_check_streams_n_rows_and_writes_waves_only_on_request():
 def test_verilator_models_are_built_once(tmp_path):
     """A second ``sim run`` on Verilator finds the model built by the first (on disk, keyed by
     the Verilog's hash), and says nothing about building."""
-    from sim.cocotb_run import available
+    from sim.simulators import available
     reason = available("verilator")
     if reason:
         pytest.skip(reason)

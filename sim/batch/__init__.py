@@ -1,0 +1,152 @@
+"""The batch path: a unit's exported Verilog in a Verilator C++ harness (``harness.cpp``), no
+Python in the clock loop. Python only packs the input rows into a binary file and unpacks the
+outputs.
+
+Each model is built once and cached under ``build/batch/``, keyed by the hash of its Verilog,
+the harness, the generated port glue and the Verilator version; the C++ is built with -O2 on
+both cores. The traffic (random valid gaps and ready stalls) follows the same rules as
+:class:`sim.stream.Traffic`, from the harness's own generator.
+"""
+import hashlib
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from importlib.metadata import version
+from pathlib import Path
+
+import numpy as np
+
+from hdl.units import make_unit
+
+from ..verilog import BUILD, export, verilator_env
+
+HARNESS = Path(__file__).with_name("harness.cpp")
+WARNINGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT"]
+_built = {}
+
+
+class BatchError(RuntimeError):
+    pass
+
+
+def _ctype(width):
+    return next(t for w, t in ((8, "CData"), (16, "SData"), (32, "IData"), (64, "QData"))
+                if width <= w)
+
+
+def ports_header(unit):
+    """The per-unit glue: field values <-> the model's named ports."""
+    fin, fout = unit.inputs, unit.outputs
+    for f in (*fin, *fout):
+        if f.fmt.width > 64:
+            raise BatchError(f"{unit.NAME}.{f.name}: fields wider than 64 bits are not supported")
+    lines = [f"#define N_IN {len(fin)}", f"#define N_OUT {len(fout)}",
+             f"#define MANY {int(bool(unit.status_ports))}",
+             "static inline void set_inputs(Vtop* t, const int64_t* r) {"]
+    for k, f in enumerate(fin):
+        mask = (1 << f.fmt.width) - 1
+        lines.append(f"    t->i_{f.name} = ({_ctype(f.fmt.width)})((uint64_t)r[{k}] & "
+                     f"{mask:#x}ULL);")
+    lines.append("}")
+    lines.append("static inline void get_outputs(Vtop* t, int64_t* r) {")
+    for k, f in enumerate(fout):
+        get = f"(uint64_t)t->o_{f.name}"
+        lines.append(f"    r[{k}] = " + (f"sext({get}, {f.fmt.width});" if f.fmt.signed
+                                          else f"(int64_t){get};"))
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+def build(name, params, *, trace=False):
+    """Build (or find in the cache) the harness for a unit; returns the executable's path."""
+    key = (name, json.dumps(params, sort_keys=True), trace)
+    if key in _built:
+        return _built[key]
+    from ..cocotb_run import _locked
+    unit = make_unit(name, spec=True, **params)
+    tag = hashlib.sha1(json.dumps(params, sort_keys=True).encode()).hexdigest()[:8]
+    base = BUILD / "batch" / (f"{name}-{tag}" + ("-trace" if trace else ""))
+    exe = base / "obj" / "harness"
+    with _locked(base.parent / f"{base.name}.lock"):
+        src = export(name, params, base)
+        glue = ports_header(unit)
+        stamp = hashlib.sha1(json.dumps([src.read_text(), HARNESS.read_text(), glue,
+                                         version("verilator"), trace]).encode()).hexdigest()
+        done = base / "obj" / "stamp"
+        if not (exe.exists() and done.exists() and done.read_text() == stamp):
+            (base / "ports.h").write_text(glue)
+            t0 = time.time()
+            print(f"{name}: building the batch Verilator model (once; cached under {base})",
+                  file=sys.stderr, flush=True)
+            cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module", name,
+                   "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o", "harness",
+                   *WARNINGS, "-CFLAGS", f"-I{base} -O2", "-MAKEFLAGS", "OPT_FAST=-O2",
+                   *(["--trace-fst"] if trace else []), str(src), str(HARNESS)]
+            r = subprocess.run(cmd, env=verilator_env(), capture_output=True, text=True)
+            (base / "build.log").write_text(r.stdout + r.stderr)
+            if r.returncode != 0:
+                raise BatchError(f"Verilator build of {name} failed (log: {base / 'build.log'}):"
+                                 f"\n{(r.stdout + r.stderr)[-3000:]}")
+            done.write_text(stamp)
+            print(f"{name}: batch model built in {time.time() - t0:.1f} s", file=sys.stderr,
+                  flush=True)
+    _built[key] = exe
+    return exe
+
+
+def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=None,
+              window=None, progress=None):
+    """Every row of ``inputs`` through the unit's Verilated model; ``(outputs, info)`` as the
+    other simulators give them. ``waves``: a path without suffix for an FST trace of the cycles
+    in ``window`` (first, last; default the whole run)."""
+    exe = build(name, params, trace=bool(waves))
+    unit = make_unit(name, spec=True, **params)
+    fin, fout = unit.inputs, unit.outputs
+    n = len(next(iter(inputs.values()))) if fin else 0
+    rows = np.stack([np.asarray(inputs[f.name], np.int64) for f in fin], -1) if n else \
+        np.zeros((0, len(fin)), np.int64)
+    with tempfile.TemporaryDirectory(dir=exe.parent.parent) as tmp:
+        tmp = Path(tmp)
+        with open(tmp / "in.bin", "wb") as f:
+            f.write(np.uint64(n).tobytes())
+            f.write(np.ascontiguousarray(rows).tobytes())
+        cmd = [str(exe), str(tmp / "in.bin"), str(tmp / "out.bin"), repr(float(p_valid)),
+               repr(float(p_ready)), str(int(seed))]
+        wave = None
+        if waves:
+            wave = Path(waves).with_suffix(".fst")
+            wave.parent.mkdir(parents=True, exist_ok=True)
+            first, last = window or (0, 2**63 - 1)
+            cmd += [str(wave), str(first), str(last)]
+        proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
+        errors = []
+
+        def read():
+            for line in proc.stderr:
+                if line.startswith("progress "):
+                    if progress:
+                        progress(*map(int, line.split()[1:]))
+                else:
+                    errors.append(line)
+        reader = threading.Thread(target=read, daemon=True)
+        reader.start()
+        try:
+            proc.wait()
+        except BaseException:
+            proc.kill()
+            raise
+        reader.join()
+        if proc.returncode != 0:
+            raise BatchError(f"batch run of {name} failed: {''.join(errors).strip()}")
+        data = np.fromfile(tmp / "out.bin", np.int64)
+    outs, cycles, latency, culled = (int(v) for v in data[:4])
+    table = data[4:].reshape(outs, len(fout))
+    out = {f.name: table[:, k].copy() for k, f in enumerate(fout)}
+    info = {"latency": None if latency < 0 else latency, "cycles": cycles, "waves": wave}
+    if unit.status_ports:
+        info["culled"] = culled
+    return out, info

@@ -1,0 +1,149 @@
+// The batch test bench: a unit's Verilated model driven from C++, no Python in the clock loop.
+//
+//   harness IN.bin OUT.bin P_VALID P_READY SEED [TRACE FIRST LAST]
+//
+// IN.bin: u64 rows, then rows x N_IN int64 field values (raw, as in the npz). The source
+// offers rows with random valid gaps (P_VALID) and holds each until it is accepted; the sink
+// is ready with probability P_READY each cycle: the same rules as sim/stream.py's Traffic,
+// from one generator (splitmix64). A stalled output must hold its payload: the harness checks
+// that and fails naming the cycle. OUT.bin: u64 rows, i64 cycles, latency (-1: none), culled,
+// then rows x N_OUT int64. Progress goes to stderr as "progress SENT OUTPUTS" lines.
+// ports.h (generated per unit by sim/batch.py) defines N_IN, N_OUT, MANY, set_inputs and
+// get_outputs.
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <vector>
+
+#include "Vtop.h"
+#include "verilated.h"
+#if VM_TRACE
+#include "verilated_fst_c.h"
+#endif
+
+static inline int64_t sext(uint64_t v, int w) {
+    return w >= 64 ? (int64_t)v : (int64_t)(v << (64 - w)) >> (64 - w);
+}
+
+#include "ports.h"
+
+struct Rng {  // splitmix64: a double in [0, 1)
+    uint64_t s;
+    double next() {
+        uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+        return (double)((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+    }
+};
+
+static void fail(const char* what, uint64_t cycle) {
+    fprintf(stderr, "error: %s at cycle %llu\n", what, (unsigned long long)cycle);
+    exit(3);
+}
+
+int main(int argc, char** argv) {
+    if (argc != 6 && argc != 9) {
+        fprintf(stderr, "usage: %s IN OUT P_VALID P_READY SEED [TRACE FIRST LAST]\n", argv[0]);
+        return 2;
+    }
+    FILE* f = fopen(argv[1], "rb");
+    uint64_t n = 0;
+    if (!f || fread(&n, 8, 1, f) != 1) fail("cannot read the input file", 0);
+    std::vector<int64_t> in(n * N_IN + 1);
+    if (n && fread(in.data(), 8, n * N_IN, f) != n * N_IN) fail("short input file", 0);
+    fclose(f);
+    const double p_valid = atof(argv[3]), p_ready = atof(argv[4]);
+    Rng rng{strtoull(argv[5], nullptr, 10)};
+
+    VerilatedContext ctx;
+    Vtop* top = new Vtop{&ctx};
+    uint64_t trace_first = 0, trace_last = 0;
+#if VM_TRACE
+    VerilatedFstC* tfp = nullptr;
+    if (argc == 9) {
+        ctx.traceEverOn(true);
+        tfp = new VerilatedFstC;
+        top->trace(tfp, 99);
+        tfp->open(argv[6]);
+        trace_first = strtoull(argv[7], nullptr, 10);
+        trace_last = strtoull(argv[8], nullptr, 10);
+    }
+#endif
+    auto tick = [&](uint64_t cycle, int clk) {
+        top->clk = clk;
+        top->eval();
+#if VM_TRACE
+        if (tfp && cycle >= trace_first && cycle <= trace_last) tfp->dump(2 * cycle + clk);
+#endif
+    };
+    top->rst = 1;
+    top->i_valid = 0;
+    top->o_ready = 0;
+    for (int k = 0; k < 2; k++) { tick(0, 0); tick(0, 1); }
+    top->rst = 0;
+
+    std::vector<int64_t> out;
+    std::vector<int64_t> cur(N_OUT + 1), held(N_OUT + 1);
+    bool valid = false, was_held = false, busy = true;
+    uint64_t sent = 0, cycles = 0, quiet = 0, outs = 0;
+    int64_t first_in = -1, first_out = -1;
+    const double rate = p_valid * p_ready > 1e-3 ? p_valid * p_ready : 1e-3;
+    const uint64_t max_cycles = 64 + (uint64_t)(4.0 * n / rate);
+    for (;;) {
+        if (MANY ? (sent >= n && !busy) : outs >= n) break;
+        if (!valid && sent < n) valid = p_valid >= 1.0 || rng.next() < p_valid;
+        const bool ready = p_ready >= 1.0 || rng.next() < p_ready;
+        top->i_valid = valid;
+        if (valid) set_inputs(top, &in[sent * N_IN]);
+        top->o_ready = ready;
+        tick(cycles, 0);
+        const bool i_ready = top->i_ready, o_valid = top->o_valid;
+        if (o_valid) get_outputs(top, cur.data());
+        if (was_held && (!o_valid || memcmp(cur.data(), held.data(), 8 * N_OUT)))
+            fail("a stalled output changed or was withdrawn before it was taken", cycles);
+        was_held = o_valid && !ready;
+        if (was_held) held = cur;
+        const bool taken = valid && i_ready;
+        if (taken) {
+            if (first_in < 0) first_in = cycles;
+            sent++;
+            valid = false;
+        }
+        if (o_valid && ready) {
+            if (first_out < 0) first_out = cycles;
+            out.insert(out.end(), cur.begin(), cur.begin() + N_OUT);
+            outs++;
+        }
+#if MANY
+        busy = top->busy || o_valid || taken;  // busy is sampled before the edge
+#endif
+        tick(cycles, 1);
+        cycles++;
+        quiet = (taken || (o_valid && ready)) ? 0 : quiet + 1;
+        if (MANY ? quiet > 100000 : cycles > max_cycles)
+            fail("no progress (nothing crossed either interface)", cycles);
+        if (!(cycles & ((1u << 20) - 1))) {
+            fprintf(stderr, "progress %llu %llu\n", (unsigned long long)sent,
+                    (unsigned long long)outs);
+        }
+    }
+#if VM_TRACE
+    if (tfp) tfp->close();
+#endif
+    int64_t culled = 0;
+#if MANY
+    culled = top->culled;
+#endif
+    top->final();
+    delete top;
+    FILE* g = fopen(argv[2], "wb");
+    if (!g) fail("cannot write the output file", cycles);
+    const int64_t head[4] = {(int64_t)outs, (int64_t)cycles,
+                             first_out < 0 ? -1 : first_out - first_in, culled};
+    fwrite(head, 8, 4, g);
+    fwrite(out.data(), 8, out.size(), g);
+    fclose(g);
+    return 0;
+}
