@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup test verilog sim report accuracy recip-cost clean
+.PHONY: setup test verilog sim report accuracy recip-cost bench soak clean
 
 setup: $(STAMP)
 
@@ -47,6 +47,15 @@ accuracy: setup
 # The setup's reciprocal: Newton-Raphson steps or the divider, clocks against accuracy.
 recip-cost: setup
 	$(PY) -m sim.recip_cost
+
+# Simulation speed side by side: every unit on every simulator (build/bench/).
+bench: setup
+	$(PY) -m sim.bench
+
+# Long streams with random stalls on the batch path against golden: 10 million rows per unit,
+# 100,000 triangles through raster.
+soak: setup
+	$(PY) -m sim.soak
 
 clean:
 	rm -rf build .pytest_cache .hypothesis results.xml sim_build

@@ -34,6 +34,10 @@ class SimulatorMissing(RuntimeError):
 
 def _env(simulator):
     env = verilator_env() if COCOTB[simulator] == "verilator" else dict(os.environ)
+    if COCOTB[simulator] == "verilator":
+        # Python runs every clock here, so the model's C++ needs no optimisation: -O0 builds
+        # about a third faster (raster: 42 s against 61 s). The batch path builds with -O2.
+        env["MAKEFLAGS"] += " OPT_FAST=-O0 OPT_SLOW=-O0 OPT_GLOBAL=-O0"
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
     return env
 
@@ -89,6 +93,7 @@ def build(name, params, simulator, *, waves=False):
                              build_args=args, timescale=("1ns", "1ps"), waves=waves,
                              always=True, clean=True, log_file=base / "build.log")
                 (build_dir / "stamp").write_text(stamp)
+                (build_dir / "build_seconds").write_text(f"{time.time() - t0:.1f}")
                 print(f"{name}: {simulator} model built in {time.time() - t0:.1f} s",
                       file=sys.stderr, flush=True)
     _built[key] = (runner, build_dir)

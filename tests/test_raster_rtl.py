@@ -111,8 +111,9 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
 
 @pytest.mark.parametrize("params,message", [
     ({"modes": "xshading,linear,exact"}, "modes names 3 channel(s) but channels=2"),
-    ({"modes": "phong"}, "unknown mode 'phong'"),
-    ({"recip": "magic"}, "recip must be 'newton' or 'divide'"),
+    ({"modes": "phong"}, "modes must be one of 'xshading', 'exact', 'linear' (one per channel), "
+                         "not 'phong'"),
+    ({"recip": "magic"}, "recip must be one of 'newton', 'divide', not 'magic'"),
     ({"screen_bits": 13}, "screen_bits must be in 4..12"),
 ])
 def test_bad_parameters_are_named(params, message):

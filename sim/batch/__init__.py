@@ -92,6 +92,7 @@ def build(name, params, *, trace=False):
                 raise BatchError(f"Verilator build of {name} failed (log: {base / 'build.log'}):"
                                  f"\n{(r.stdout + r.stderr)[-3000:]}")
             done.write_text(stamp)
+            (base / "obj" / "build_seconds").write_text(f"{time.time() - t0:.1f}")
             print(f"{name}: batch model built in {time.time() - t0:.1f} s", file=sys.stderr,
                   flush=True)
     _built[key] = exe
