@@ -85,6 +85,7 @@ int main(int argc, char** argv) {
     top->rst = 0;
 
     std::vector<int64_t> out;
+    if (!MANY) out.reserve(n * N_OUT);
     std::vector<int64_t> cur(N_OUT + 1), held(N_OUT + 1);
     bool valid = false, was_held = false, busy = true;
     uint64_t sent = 0, cycles = 0, quiet = 0, outs = 0;
