@@ -16,6 +16,7 @@ import argparse
 import json
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -26,12 +27,12 @@ from .cli_common import (UsageError, check_output_path, read_fields, read_inputs
 from .simulators import SIMS, available
 
 def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=0,
-             waves=None, progress=False):
+             waves=None, window=None, progress=False):
     """Run inputs through the RTL on any simulator (``sim.simulators``); returns
     ``(outputs, info)``.
 
-    ``waves``: a path without suffix for the trace (VCD from Amaranth and cocotb-Verilator,
-    FST from Icarus and the batch path). With ``progress``, a progress bar on stderr."""
+    ``waves``: a path without suffix for the trace (FST from Icarus, VCD from the others); ``window``: (first, last) cycles to trace, on the
+    batch path. With ``progress``, a progress bar on stderr."""
     reason = available(simulator)
     if reason:
         raise UsageError(f"{simulator}: {reason}")
@@ -59,7 +60,8 @@ def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=
                          **getattr(tr, "status", {})}
         if simulator == "verilator":
             from .batch import run_batch
-            return run_batch(name, params, inputs, waves=waves, progress=bar, **traffic)
+            return run_batch(name, params, inputs, waves=waves, window=window, progress=bar,
+                             **traffic)
         from .cocotb_run import run_cocotb
         return run_cocotb(name, params, inputs, simulator, waves=waves, progress=bar, **traffic)
     finally:
@@ -69,9 +71,11 @@ def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=
 
 def cmd_units(args):
     units = [describe(n) for n in UNITS]
+    sims = {s: available(s) or "available" for s in SIMS}
     if args.json:
-        print(json.dumps({"units": units}, indent=2))
+        print(json.dumps({"units": units, "simulators": sims}, indent=2))
         return
+    print("simulators: " + "; ".join(f"{s} ({why})" for s, why in sims.items()) + "\n")
     for u in units:
         print(f"{u['name']}  (latency {u['latency']} at the defaults)\n  {u['doc']}")
         for k, v in u["params"].items():
@@ -93,14 +97,36 @@ def cmd_run(args):
     unit = make_unit(args.unit, spec=True, **params)
     inputs = read_inputs(unit, args.inp)
     check_output_path(args.out)
+    waves, window = trace_args(args)
     t0 = time.time()
     if rows(inputs):
-        out, info = simulate(args.unit, unit.params, inputs, args.simulator, progress=True)
+        out, info = simulate(args.unit, unit.params, inputs, args.simulator, progress=True,
+                             waves=waves, window=window)
     else:
         out, info = {f.name: np.zeros(0, np.int64) for f in unit.outputs}, {"cycles": 0}
     write_outputs(unit, args.out, out)
     print(f"{args.unit} on {args.simulator}: {summary(unit, inputs, out, info.get('culled'))} "
-          f"in {info['cycles']:,} cycles ({time.time() - t0:.1f} s) -> {args.out}")
+          f"in {info['cycles']:,} cycles ({time.time() - t0:.1f} s) -> {args.out}"
+          + (f"; waves: {info['waves']}" if info.get("waves") else ""))
+
+
+def trace_args(args):
+    """``--trace FILE`` and ``--trace-window FIRST:LAST`` -> (path without suffix, window)."""
+    if args.trace_window and not args.trace:
+        raise UsageError("--trace-window needs --trace FILE")
+    if args.trace_window and args.simulator != "verilator":
+        raise UsageError("--trace-window works on the batch path (--simulator verilator)")
+    window = None
+    if args.trace_window:
+        first, sep, last = args.trace_window.partition(":")
+        if not (sep and first.isdigit() and last.isdigit() and int(first) <= int(last)):
+            raise UsageError(f"--trace-window must be FIRST:LAST cycles, not "
+                             f"{args.trace_window!r}")
+        window = (int(first), int(last))
+    if args.trace:
+        check_output_path(args.trace, "--trace")
+        return Path(args.trace).with_suffix(""), window
+    return None, window
 
 
 def cmd_verilog(args):
@@ -193,6 +219,11 @@ def main(argv=None):
                    help="amaranth | icarus | cocotb-verilator (cocotb benches) | verilator "
                         "(the fast batch path)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--trace", metavar="FILE",
+                   help="write a waveform (FST from icarus, VCD from the others; the suffix "
+                        "is the simulator's)")
+    p.add_argument("--trace-window", metavar="FIRST:LAST",
+                   help="only these cycles (batch path), to open a failure in a viewer")
     p = sub.add_parser("verilog", help="export and lint the Verilog of every unit")
     p.add_argument("--out")
     p = sub.add_parser("check", help="golden vectors through the RTL, or your outputs against "

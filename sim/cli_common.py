@@ -63,16 +63,16 @@ def rows(arrays):
     return len(next(iter(arrays.values()))) if arrays else 0
 
 
-def check_output_path(path):
+def check_output_path(path, option="--out"):
     """Fail before any work if ``path`` cannot be written (written exactly as given)."""
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
     if path.is_dir():
-        raise UsageError(f"--out {path}: is a directory; give a file name")
+        raise UsageError(f"{option} {path}: is a directory; give a file name")
     if not parent.is_dir():
-        raise UsageError(f"--out {path}: directory {parent} does not exist")
+        raise UsageError(f"{option} {path}: directory {parent} does not exist")
     if not os.access(parent, os.W_OK):
-        raise UsageError(f"--out {path}: directory {parent} is not writable")
+        raise UsageError(f"{option} {path}: directory {parent} is not writable")
 
 
 def write_outputs(unit, path, outputs):

@@ -249,3 +249,23 @@ def test_verilator_models_are_built_once(tmp_path):
     assert "building" not in r.stderr, r.stderr
     gold = MODELS["texel_decode"].run(dict(np.load(tmp_path / "in.npz")))
     assert all(np.array_equal(np.load(tmp_path / "out.npz")[k], gold[k]) for k in gold)
+
+
+@pytest.mark.xdist_group("verilator-texel_decode")
+def test_batch_trace_window(tmp_path):
+    """``sim run --simulator verilator --trace F --trace-window A:B``: a VCD of exactly those
+    cycles (two time steps a cycle), to open a failure in a viewer."""
+    from sim.simulators import available
+    reason = available("verilator")
+    if reason:
+        pytest.skip(reason)
+    _texels(tmp_path / "in.npz", 200)
+    r = cli("sim", "run", "texel_decode", "--in", str(tmp_path / "in.npz"), "--out",
+            str(tmp_path / "out.npz"), "--simulator", "verilator", "--trace",
+            str(tmp_path / "w.vcd"), "--trace-window", "10:50")
+    assert r.returncode == 0, r.stderr
+    lines = (tmp_path / "w.vcd").read_text().splitlines()
+    assert sum(line.startswith("#") for line in lines) == 2 * 41
+    assert any("i_texel_x" in line for line in lines)
+    _fails(cli("sim", "run", "texel_decode", "--in", str(tmp_path / "in.npz"), "--out",
+               str(tmp_path / "out.npz"), "--trace-window", "10:50"), "needs --trace")

@@ -88,7 +88,7 @@ def build(name, params, *, trace=False):
             cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module", name,
                    "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o", "harness",
                    *WARNINGS, *SPEED, "-CFLAGS", f"-I{base} -O2", "-MAKEFLAGS", "OPT_FAST=-O2",
-                   *(["--trace-fst"] if trace else []), str(src), str(HARNESS)]
+                   *(["--trace"] if trace else []), str(src), str(HARNESS)]
             r = subprocess.run(cmd, env=verilator_env(), capture_output=True, text=True)
             (base / "build.log").write_text(r.stdout + r.stderr)
             if r.returncode != 0:
@@ -105,8 +105,8 @@ def build(name, params, *, trace=False):
 def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=None,
               window=None, progress=None):
     """Every row of ``inputs`` through the unit's Verilated model; ``(outputs, info)`` as the
-    other simulators give them. ``waves``: a path without suffix for an FST trace of the cycles
-    in ``window`` (first, last; default the whole run)."""
+    other simulators give them. ``waves``: a path without suffix for a VCD of the cycles in
+    ``window`` (first, last; default the whole run). (FST would need the system's lz4.)"""
     exe = build(name, params, trace=bool(waves))
     unit = make_unit(name, spec=True, **params)
     fin, fout = unit.inputs, unit.outputs
@@ -122,7 +122,7 @@ def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=N
                repr(float(p_ready)), str(int(seed))]
         wave = None
         if waves:
-            wave = Path(waves).with_suffix(".fst")
+            wave = Path(waves).with_suffix(".vcd")
             wave.parent.mkdir(parents=True, exist_ok=True)
             first, last = window or (0, 2**63 - 1)
             cmd += [str(wave), str(first), str(last)]

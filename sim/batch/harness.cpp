@@ -2,7 +2,7 @@
 //
 //   harness IN.bin OUT.bin P_VALID P_READY SEED [TRACE FIRST LAST]
 //
-// IN.bin: u64 rows, then rows x N_IN int64 field values (raw, as in the npz). The source
+// TRACE: a VCD of the cycles FIRST..LAST. IN.bin: u64 rows, then rows x N_IN int64 field values (raw, as in the npz). The source
 // offers rows with random valid gaps (P_VALID) and holds each until it is accepted; the sink
 // is ready with probability P_READY each cycle: the same rules as sim/stream.py's Traffic,
 // from one generator (splitmix64). A stalled output must hold its payload: the harness checks
@@ -19,7 +19,7 @@
 #include "Vtop.h"
 #include "verilated.h"
 #if VM_TRACE
-#include "verilated_fst_c.h"
+#include "verilated_vcd_c.h"
 #endif
 
 static inline int64_t sext(uint64_t v, int w) {
@@ -61,10 +61,10 @@ int main(int argc, char** argv) {
     Vtop* top = new Vtop{&ctx};
     uint64_t trace_first = 0, trace_last = 0;
 #if VM_TRACE
-    VerilatedFstC* tfp = nullptr;
+    VerilatedVcdC* tfp = nullptr;
     if (argc == 9) {
         ctx.traceEverOn(true);
-        tfp = new VerilatedFstC;
+        tfp = new VerilatedVcdC;
         top->trace(tfp, 99);
         tfp->open(argv[6]);
         trace_first = strtoull(argv[7], nullptr, 10);
