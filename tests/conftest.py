@@ -3,8 +3,14 @@
 Tests that use one (simulator, unit) pair are grouped onto one xdist worker, so each Verilog
 model is built once per run.
 """
+import os
+
 import numpy as np
 import pytest
+
+# Batch models built for the tests are optimised for build time (sim/batch: SHADE_BATCH_OPT);
+# set before sim.batch is imported, and inherited by the CLI's subprocesses.
+os.environ.setdefault("SHADE_BATCH_OPT", "-O0")
 from hypothesis import settings
 
 # Property tests check values, not speed: no per-example deadline on a loaded CI machine.

@@ -29,6 +29,9 @@ WARNINGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT"]
 # Verilator's own optimisations; Amaranth's Verilog assigns no X, so X handling may be fast.
 # texel_decode: about 5 against 3 million rows/s with the defaults (make bench).
 SPEED = ["-O3", "--x-assign", "fast", "--x-initial", "fast"]
+# The C++ optimisation: -O2 runs fast; the tests set SHADE_BATCH_OPT=-O0, which builds the
+# large units in about half the time and runs their short vectors just as well.
+OPT = os.environ.get("SHADE_BATCH_OPT", "-O2")
 _built = {}
 
 
@@ -72,7 +75,7 @@ def build(name, params, *, trace=False):
     from ..cocotb_run import _locked
     unit = make_unit(name, spec=True, **params)
     tag = hashlib.sha1(json.dumps(params, sort_keys=True).encode()).hexdigest()[:8]
-    base = BUILD / "batch" / (f"{name}-{tag}" + ("-trace" if trace else ""))
+    base = BUILD / "batch" / (f"{name}-{tag}{OPT}" + ("-trace" if trace else ""))
     exe = base / "obj" / "harness"
     with _locked(base.parent / f"{base.name}.lock"):
         src = export(name, params, base)
@@ -87,7 +90,8 @@ def build(name, params, *, trace=False):
                   file=sys.stderr, flush=True)
             cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module", name,
                    "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o", "harness",
-                   *WARNINGS, *SPEED, "-CFLAGS", f"-I{base} -O2", "-MAKEFLAGS", "OPT_FAST=-O2",
+                   *WARNINGS, *SPEED, "-CFLAGS", f"-I{base} {OPT}", "-MAKEFLAGS",
+                   f"OPT_FAST={OPT} OPT_SLOW={OPT} OPT_GLOBAL={OPT}",
                    *(["--trace"] if trace else []), str(src), str(HARNESS)]
             r = subprocess.run(cmd, env=verilator_env(), capture_output=True, text=True)
             (base / "build.log").write_text(r.stdout + r.stderr)
