@@ -26,7 +26,7 @@ from .simulators import SIMS, available
 from .verilog import BUILD
 
 OUT = BUILD / "bench"
-ROWS = {"amaranth": 2000, "icarus": 5000, "cocotb-verilator": 5000, "verilator": 5000}
+ROWS = {"amaranth": 5000, "icarus": 20000, "cocotb-verilator": 20000, "verilator": 20000}
 TRIANGLES = {"amaranth": 20, "icarus": 40, "cocotb-verilator": 40, "verilator": 40}
 RASTER = {"screen_bits": 10}
 
@@ -62,7 +62,8 @@ def main(argv=None):
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--units", help="comma-separated units (default: all)")
     ap.add_argument("--batch-rows", type=int, default=2_000_000,
-                    help="rows the batch path streams (the vectors repeated; default 2,000,000)")
+                    help="rows the batch path streams, the vectors repeated (default 2,000,000;"
+                         " raster: a thousandth as many triangles)")
     args = ap.parse_args(argv)
     with user_errors():
         names = args.units.split(",") if args.units else list(UNITS)
@@ -82,7 +83,7 @@ def main(argv=None):
                 n = (TRIANGLES if many else ROWS)[sim]
                 inputs = MODELS[name].vectors(np.random.default_rng(1), n, **full)
                 if sim == "verilator":
-                    reps = max(1, (args.batch_rows // 100 if many else args.batch_rows) // n)
+                    reps = max(1, (args.batch_rows // 1000 if many else args.batch_rows) // n)
                     inputs = {k: np.tile(v, reps) for k, v in inputs.items()}
                 print(f"{name} on {sim}: {len(next(iter(inputs.values()))):,} "
                       f"{'triangles' if many else 'rows'}", file=sys.stderr, flush=True)

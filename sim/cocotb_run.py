@@ -22,7 +22,7 @@ from hdl.units import make_unit
 
 from .progress import watch
 from .simulators import COCOTB, available
-from .verilog import BUILD, ROOT, export, verilator_env
+from .verilog import BUILD, ROOT, export, prune_objects, verilator_env
 
 VERILATOR_ARGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT", "-O2"]
 _built = {}
@@ -92,6 +92,8 @@ def build(name, params, simulator, *, waves=False):
                 runner.build(sources=[src], hdl_toplevel=name, build_dir=build_dir,
                              build_args=args, timescale=("1ns", "1ps"), waves=waves,
                              always=True, clean=True, log_file=base / "build.log")
+                if COCOTB[simulator] == "verilator":
+                    prune_objects(build_dir)
                 (build_dir / "stamp").write_text(stamp)
                 (build_dir / "build_seconds").write_text(f"{time.time() - t0:.1f}")
                 print(f"{name}: {simulator} model built in {time.time() - t0:.1f} s",

@@ -95,6 +95,15 @@ def verilator_env():
     return env
 
 
+def prune_objects(obj_dir):
+    """Delete a built Verilator model's intermediates (C++, objects, archives, precompiled
+    headers: nearly all of the 140 MB a large unit takes), keeping the executable. A rebuild
+    starts afresh."""
+    for pattern in ("*.o", "*.a", "*.cpp", "*.h", "*.d", "*.gch"):
+        for f in Path(obj_dir).glob(pattern):
+            f.unlink()
+
+
 def lint(path, top):
     """``verilator --lint-only -Wall`` with only the accepted warnings off; returns output."""
     env = verilator_env()

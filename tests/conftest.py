@@ -11,10 +11,12 @@ import pytest
 # Batch models built for the tests are optimised for build time (sim/batch: SHADE_BATCH_OPT);
 # set before sim.batch is imported, and inherited by the CLI's subprocesses.
 os.environ.setdefault("SHADE_BATCH_OPT", "-O0")
-from hypothesis import settings
+from hypothesis import HealthCheck, settings
 
-# Property tests check values, not speed: no per-example deadline on a loaded CI machine.
-settings.register_profile("shading", deadline=None)
+# Property tests check values, not speed: no per-example deadline, and no health check that
+# times example generation, on a loaded CI machine.
+settings.register_profile("shading", deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("shading")
 
 from golden import MODELS

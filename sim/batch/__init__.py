@@ -22,7 +22,7 @@ import numpy as np
 
 from hdl.units import make_unit
 
-from ..verilog import BUILD, export, verilator_env
+from ..verilog import BUILD, export, prune_objects, verilator_env
 
 HARNESS = Path(__file__).with_name("harness.cpp")
 WARNINGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT"]
@@ -98,6 +98,7 @@ def build(name, params, *, trace=False):
             if r.returncode != 0:
                 raise BatchError(f"Verilator build of {name} failed (log: {base / 'build.log'}):"
                                  f"\n{(r.stdout + r.stderr)[-3000:]}")
+            prune_objects(base / "obj")
             done.write_text(stamp)
             (base / "obj" / "build_seconds").write_text(f"{time.time() - t0:.1f}")
             print(f"{name}: batch model built in {time.time() - t0:.1f} s", file=sys.stderr,
