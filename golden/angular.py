@@ -210,7 +210,7 @@ def _paper_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
     in any quadrant those signs allow; next to N (where phi' is meaningless) that is any
     angle, and the bound is half a turn.
     """
-    from hdl.rotation_unit.rotation import (ATAN_EXP_LO, PROP_FRAC, asin_lut, atan_lut,
+    from hdl.rotation_unit.rotation import (PROP_FRAC, asin_lut, atan_lut,
                                             prop_lut, recip_sin_lut)
     from hdl.lut import quarter_cos_lut
     lsb = 2 * np.pi / 2**angle_bits

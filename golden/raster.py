@@ -12,7 +12,7 @@ inputs the RTL gets, saturated to the value format like the RTL.
 """
 import numpy as np
 
-from hdl.setup_unit.formats import EDGE, VALUE, coord, parse_modes
+from hdl.setup_unit.formats import EDGE, VALUE, parse_modes
 
 from . import quadratic as q
 

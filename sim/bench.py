@@ -21,7 +21,7 @@ from golden import MODELS
 from hdl.units import UNITS, make_unit
 
 from .__main__ import simulate
-from .cli_common import UsageError, user_errors
+from .cli_common import unit_names, user_errors
 from .simulators import SIMS, available
 from .verilog import BUILD
 
@@ -66,10 +66,7 @@ def main(argv=None):
                          " raster: a thousandth as many triangles)")
     args = ap.parse_args(argv)
     with user_errors():
-        names = args.units.split(",") if args.units else list(UNITS)
-        bad = [n for n in names if n not in UNITS]
-        if bad:
-            raise UsageError(f"--units: unknown unit {bad[0]!r}; known: {', '.join(UNITS)}")
+        names = unit_names(args.units, UNITS)
         sims = [s for s in SIMS if available(s) is None]
         for s in SIMS:
             if s not in sims:

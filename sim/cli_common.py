@@ -59,6 +59,15 @@ def read_inputs(unit, path):
     return inputs
 
 
+def unit_names(text, known):
+    """``--units a,b`` -> a list of registered unit names (all of them when not given)."""
+    names = text.split(",") if text else list(known)
+    bad = [n for n in names if n not in known]
+    if bad:
+        raise UsageError(f"--units: unknown unit {bad[0]!r}; known: {', '.join(known)}")
+    return names
+
+
 def rows(arrays):
     return len(next(iter(arrays.values()))) if arrays else 0
 

@@ -17,7 +17,7 @@ from golden import MODELS
 from hdl.units import UNITS, make_unit
 
 from .__main__ import simulate
-from .cli_common import UsageError, user_errors
+from .cli_common import unit_names, user_errors
 
 CHUNK = 1_000_000            # rows checked against golden at a time (memory)
 TRAFFIC = {"p_valid": 0.8, "p_ready": 0.7, "seed": 17}
@@ -85,10 +85,7 @@ def main(argv=None):
     ap.add_argument("--units", help="comma-separated units (default: all)")
     args = ap.parse_args(argv)
     with user_errors():
-        names = args.units.split(",") if args.units else list(UNITS)
-        bad = [n for n in names if n not in UNITS]
-        if bad:
-            raise UsageError(f"--units: unknown unit {bad[0]!r}; known: {', '.join(UNITS)}")
+        names = unit_names(args.units, UNITS)
         failed = 0
         for name in names:
             ok, text = soak_raster(args.triangles) if name == "raster" else \

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from golden import MODELS, angular
+from golden import angular
 from sim.report import count
 
 from .conftest import assert_golden, per_simulator, stream

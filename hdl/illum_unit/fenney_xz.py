@@ -1,5 +1,4 @@
 """The second embodiment end to end: texel_decode -> fenney_dot -> fenney_power."""
-from ..fixed import Field, s, u
 from ..unit import Unit
 from .fenney_dot import FenneyDot
 from .fenney_power import FenneyPower

@@ -12,7 +12,7 @@ additions per pixel. Why these widths: ``Widths`` and docs/quadratic.md.
 """
 from dataclasses import dataclass
 
-from amaranth.hdl import Const, Mux, signed, unsigned
+from amaranth.hdl import Const, Mux
 
 from .. import arith
 from ..fixed import Field, s, u

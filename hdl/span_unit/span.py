@@ -17,10 +17,9 @@ Three parts, each a stream stage with backpressure:
 - ``stepper``: one fragment per clock, two additions per quadratic channel per pixel:
   Phi += d, d += 2A (one for a linear channel, whose 2A is 0).
 """
-from amaranth.hdl import Const, Mux, Signal
+from amaranth.hdl import Mux, Signal
 
 from ..setup_unit.formats import VALUE
-from ..setup_unit.setup import EDGES
 
 __all__ = ["Link", "walker", "row_eval", "stepper"]
 
