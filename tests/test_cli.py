@@ -147,11 +147,14 @@ def test_zero_rows_give_zero_rows_with_a_note(tool, tmp_path):
 
 
 def test_ctrl_c_is_one_line_and_exit_130(tmp_path):
-    """SIGINT once the simulation is under way (its progress bar is up): exit 130, one line."""
+    """SIGINT once the simulation is under way (its progress bar is up): exit 130, one line.
+    The child gets SIGINT's default disposition, as under a terminal: a shell without job
+    control (CI's, a background job) starts its children with SIGINT ignored."""
     _texels(tmp_path / "in.npz", 2_000_000)
     proc = subprocess.Popen([sys.executable, "-m", "sim", "run", "texel_decode", "--in",
                              str(tmp_path / "in.npz"), "--out", str(tmp_path / "out.npz")],
-                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     seen = b""
     while b"texel_decode on amaranth" not in seen:
         chunk = os.read(proc.stderr.fileno(), 4096)
