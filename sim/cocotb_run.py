@@ -4,7 +4,6 @@ A model is built once and kept under ``build/cocotb/<simulator>/``, keyed by the
 Verilog, the build arguments and the tool versions: an unchanged unit is not built again, in
 this process or the next. A lock file keeps two processes from building the same model at once.
 """
-import fcntl
 import hashlib
 import json
 import os
@@ -22,7 +21,7 @@ from hdl.units import make_unit
 
 from .progress import watch
 from .simulators import COCOTB, available
-from .verilog import BUILD, ROOT, export, prune_objects, verilator_env
+from .verilog import BUILD, ROOT, build_lock, export, prune_objects, verilator_env
 
 VERILATOR_ARGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT", "-O2"]
 _built = {}
@@ -53,17 +52,6 @@ def _environ(env):
         os.environ.update(saved)
 
 
-@contextmanager
-def _locked(path):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w") as f:
-        fcntl.flock(f, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(f, fcntl.LOCK_UN)
-
-
 def build(name, params, simulator, *, waves=False):
     """Build (or find in the cache) and return ``(runner, build_dir)``."""
     reason = available(simulator)
@@ -77,7 +65,7 @@ def build(name, params, simulator, *, waves=False):
     base = BUILD / "cocotb" / COCOTB[simulator] / (f"{name}-{tag}" + ("-waves" if waves else ""))
     build_dir = base / "obj"
     args = VERILATOR_ARGS if COCOTB[simulator] == "verilator" else []
-    with _locked(base.parent / f"{base.name}.lock"):
+    with build_lock(base.parent / f"{base.name}.lock"):
         src = export(name, params, base)
         tools = [version("cocotb")] + ([version("verilator")] if args else [])
         stamp = hashlib.sha1(json.dumps([src.read_text(), args, tools]).encode()).hexdigest()

@@ -1,7 +1,9 @@
 """Verilog export of registered units, and Verilator lint."""
+import fcntl
 import json
 import os
 import subprocess
+from contextlib import contextmanager
 from pathlib import Path
 
 from amaranth.back import verilog
@@ -92,6 +94,19 @@ def verilator_env():
     env["MAKEFLAGS"] = " ".join(filter(None, [env.get("MAKEFLAGS", ""),
                                               "VK_PCH_I_FAST=", "VK_PCH_I_SLOW="]))
     return env
+
+
+@contextmanager
+def build_lock(path):
+    """Hold an exclusive lock on ``path`` while a model is checked and built, so two processes
+    never build the same model at once."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
 
 
 def prune_objects(obj_dir):

@@ -22,7 +22,7 @@ import numpy as np
 
 from hdl.units import make_unit
 
-from ..verilog import BUILD, export, prune_objects, verilator_env
+from ..verilog import BUILD, build_lock, export, prune_objects, verilator_env
 
 HARNESS = Path(__file__).with_name("harness.cpp")
 WARNINGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT"]
@@ -72,12 +72,11 @@ def build(name, params, *, trace=False):
     key = (name, json.dumps(params, sort_keys=True), trace)
     if key in _built:
         return _built[key]
-    from ..cocotb_run import _locked
     unit = make_unit(name, spec=True, **params)
     tag = hashlib.sha1(json.dumps(params, sort_keys=True).encode()).hexdigest()[:8]
     base = BUILD / "batch" / (f"{name}-{tag}{OPT}" + ("-trace" if trace else ""))
     exe = base / "obj" / "harness"
-    with _locked(base.parent / f"{base.name}.lock"):
+    with build_lock(base.parent / f"{base.name}.lock"):
         src = export(name, params, base)
         glue = ports_header(unit)
         stamp = hashlib.sha1(json.dumps([src.read_text(), HARNESS.read_text(), glue,
