@@ -18,7 +18,7 @@ import numpy as np
 
 from hdl.setup_unit.formats import EDGE, VALUE
 
-from . import angular, fenney, raster
+from . import angular, fenney, raster, shade
 
 __all__ = ["MODELS", "Model", "TYPICAL_SIZE", "raster_hard_cases", "random_triangles"]
 
@@ -401,4 +401,12 @@ MODELS = {
     "rotation": Model(_rotation_run, _rotation_vectors, _rotation_check, False),
     "bump_polar": Model(_bump_run, _bump_vectors, _bump_check, False),
     "raster": Model(_raster_run, _raster_vectors, _raster_check, False, typical=300),
+    "phong": Model(lambda inp, **q: shade.phong(inp, **q)[0], shade._phong_vectors,
+                   shade.phong_check, False),
+    "power_table": Model(lambda inp, **q: {"p": shade.power_table(inp["s"], **q)},
+                         shade._power_vectors,
+                         _exact_check(lambda inp, **q: {"p": shade.power_table(inp["s"], **q)}),
+                         True),
+    "colour": Model(lambda inp, **q: shade.colour(inp, **q), shade._colour_vectors,
+                    _exact_check(shade.colour), True),
 }

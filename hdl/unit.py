@@ -3,7 +3,8 @@
 A unit subclasses :class:`Unit` and supplies
 
 - ``NAME``, ``PARAMS`` (``{name: default}``), ``RANGES`` (``{name: (lo, hi)}`` for an
-  integer, ``{name: ("a", "b")}`` for a choice; booleans need none), and the
+  integer, ``{name: ("a", "b")}`` for a choice; a float default takes a ``(lo, hi)`` range too;
+  booleans need none), and the
   ``inputs``/``outputs`` field lists;
 - ``latency``, the register stages from an accepted input to its output;
 - ``datapath(p, v)``: given a :class:`Pipeline` and a dict of named values available at the
@@ -14,6 +15,8 @@ item goes through per clock while ``o.ready`` is high, and under backpressure ev
 nothing is lost, repeated or reordered. Composed units call their parts' ``datapath`` on one
 pipeline; values a later stage needs ride along in the dict.
 """
+from contextlib import contextmanager
+import math
 import operator
 
 from amaranth.hdl import Module, Signal, Value
@@ -22,7 +25,8 @@ from amaranth.lib.wiring import In, Out
 
 from .fixed import layout
 
-__all__ = ["Pipeline", "Unit", "check_int", "check_bool", "check_param", "param_range"]
+__all__ = ["Pipeline", "Unit", "check_int", "check_bool", "check_float", "check_param",
+           "param_range"]
 
 
 def check_int(name, value, lo, hi):
@@ -41,12 +45,22 @@ def check_bool(name, value):
     return value
 
 
+def check_float(name, value, lo, hi):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"{name} must be a number, not {value!r}")
+    if not (math.isfinite(value) and lo <= value <= hi):
+        raise ValueError(f"{name} must be a finite number in {lo}..{hi}, not {value}")
+    return float(value)
+
+
 def check_param(name, value, default, allowed, per_channel=False):
     """One constructor parameter against its default's type and its ``RANGES`` entry."""
     if isinstance(default, bool):
         return check_bool(name, value)
     if isinstance(default, int):
         return check_int(name, value, *allowed)
+    if isinstance(default, float):
+        return check_float(name, value, *allowed)
     if not isinstance(value, str):
         raise TypeError(f"{name} must be a string, not {value!r}")
     parts = [v.strip() for v in value.split(",")] if per_channel else [value]
@@ -62,7 +76,7 @@ def param_range(default, allowed, per_channel=False):
     """A parameter's range or choices, for ``sim units --json``."""
     if isinstance(default, bool):
         return {"choices": [False, True]}
-    if isinstance(default, int):
+    if isinstance(default, (int, float)):
         return {"min": allowed[0], "max": allowed[1]}
     out = {"choices": list(allowed)}
     if per_channel:
@@ -114,6 +128,18 @@ class Pipeline:
     def valid(self):
         return self._valid
 
+    @contextmanager
+    def part(self, name):
+        """Stages added inside go into a submodule ``name``, so a composed design keeps its
+        units' names in its hierarchy (and in its Verilog)."""
+        outer = self.m
+        self.m = Module()
+        outer.submodules[name] = self.m
+        try:
+            yield
+        finally:
+            self.m = outer
+
 
 class Unit(wiring.Component):
     NAME = None
@@ -140,10 +166,14 @@ class Unit(wiring.Component):
         super().__init__({
             "i": In(stream.Signature(layout(self.inputs))),
             "o": Out(stream.Signature(layout(self.outputs))),
+            **{f"u_{f.name}": In(f.fmt.shape) for f in self.uniforms},
             **self.status_ports,
         })
 
     status_ports = {}   # extra outputs (a unit that emits many rows per input: busy, counters)
+    # Uniforms: inputs held for a whole run (a light's direction, a material's colour), the
+    # registers a host writes before it streams triangles; ports ``u_<field>``.
+    uniforms = ()
 
     @classmethod
     def spec(cls, **params):
@@ -196,6 +226,7 @@ class NamedPorts(wiring.Component):
         self.unit = unit
         members = {"i_valid": In(1), "i_ready": Out(1)}
         members.update({f"i_{f.name}": In(f.fmt.shape) for f in unit.inputs})
+        members.update({f"u_{f.name}": In(f.fmt.shape) for f in unit.uniforms})
         members.update({"o_valid": Out(1), "o_ready": In(1)})
         members.update({f"o_{f.name}": Out(f.fmt.shape) for f in unit.outputs})
         clash = set(members) & set(unit.status_ports)
@@ -213,5 +244,7 @@ class NamedPorts(wiring.Component):
                      for f in unit.inputs]
         m.d.comb += [getattr(self, f"o_{f.name}").eq(unit.o.payload[f.name])
                      for f in unit.outputs]
+        m.d.comb += [getattr(unit, f"u_{f.name}").eq(getattr(self, f"u_{f.name}"))
+                     for f in unit.uniforms]
         m.d.comb += [getattr(self, name).eq(getattr(unit, name)) for name in unit.status_ports]
         return m

@@ -3,11 +3,24 @@ all go through it, so a unit registered here is exported, linted, simulated and 
 from .illum_unit import (BumpPolar, FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, Illum,
                          TexelDecode)
 from .rotation_unit import Rotation
+from .shade_unit import Colour, Phong, PowerTable
 from .span_unit import Raster
 from .unit import Unit
 
 UNITS = {cls.NAME: cls for cls in (TexelDecode, FenneyPower, FenneyDot, FenneyXZ, FenneyPolar,
-                                   Illum, Rotation, BumpPolar, Raster)}
+                                   Illum, Rotation, BumpPolar, Raster, Phong, PowerTable,
+                                   Colour)}
+
+
+# Composed designs: built by make_unit and every simulator like a unit, not listed as units.
+PIPELINES = {}
+
+
+def _pipelines():
+    if not PIPELINES:
+        from .scene import ScenePipeline
+        PIPELINES[ScenePipeline.NAME] = ScenePipeline
+    return PIPELINES
 
 
 class ParamError(ValueError):
@@ -16,7 +29,7 @@ class ParamError(ValueError):
 
 def parse_params(name, pairs):
     """``["NAME=VALUE", ...]`` -> dict, typed like the unit's defaults."""
-    cls = UNITS[name]
+    cls = UNITS.get(name) or _pipelines()[name]
     out = {}
     for pair in pairs or ():
         key, sep, text = pair.partition("=")
@@ -30,6 +43,11 @@ def parse_params(name, pairs):
             if text.lower() not in ("true", "false", "1", "0"):
                 raise ParamError(f"{name}: parameter {key} must be true or false, not {text!r}")
             out[key] = text.lower() in ("true", "1")
+        elif isinstance(default, float):
+            try:
+                out[key] = float(text)
+            except ValueError:
+                raise ParamError(f"{name}: parameter {key} must be a number, not {text!r}") from None
         elif isinstance(default, int):
             try:
                 out[key] = int(text, 0)
@@ -42,10 +60,11 @@ def parse_params(name, pairs):
 
 def make_unit(name, *, spec=False, **params) -> Unit:
     """A unit to elaborate, or with ``spec=True`` one used only for its formats and params."""
-    if name not in UNITS:
+    cls = UNITS.get(name) or _pipelines().get(name)
+    if cls is None:
         raise ParamError(f"unknown unit {name!r}; known: {', '.join(UNITS)}")
     try:
-        return UNITS[name].spec(**params) if spec else UNITS[name](**params)
+        return cls.spec(**params) if spec else cls(**params)
     except (TypeError, ValueError) as e:
         raise ParamError(str(e)) from None
 

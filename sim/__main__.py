@@ -27,12 +27,14 @@ from .cli_common import (UsageError, check_output_path, read_fields, read_inputs
 from .simulators import SIMS, available
 
 def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=0,
-             waves=None, window=None, progress=False):
+             waves=None, window=None, progress=False, uniforms=None):
     """Run inputs through the RTL on any simulator (``sim.simulators``); returns
     ``(outputs, info)``.
 
     ``waves``: a path without suffix for the trace (FST from Icarus, VCD from the others); ``window``: (first, last) cycles to trace, on the
-    batch path. With ``progress``, a progress bar on stderr."""
+    batch path. With ``progress``, a progress bar on stderr (``progress`` a string: its label).
+    ``uniforms``: the values of the unit's uniform ports (a scene pipeline's lights and
+    colours), held for the run."""
     reason = available(simulator)
     if reason:
         raise UsageError(f"{simulator}: {reason}")
@@ -47,9 +49,10 @@ def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=
     bar = None
     if progress:
         from .progress import Progress
-        bar = Progress(f"{name} on {simulator}", rows(inputs), many,
+        label = progress if isinstance(progress, str) else name
+        bar = Progress(f"{label} on {simulator}", rows(inputs), many,
                        "tri" if many else "row")
-    traffic = dict(p_valid=p_valid, p_ready=p_ready, seed=seed)
+    traffic = dict(p_valid=p_valid, p_ready=p_ready, seed=seed, uniforms=uniforms)
     try:
         if simulator == "amaranth":
             from .amaranth_run import run_amaranth

@@ -8,8 +8,10 @@ def fields_of(unit):
     return ([f.describe() for f in unit.inputs], [f.describe() for f in unit.outputs])
 
 
-def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, progress=None):
-    """Run every row of ``inputs`` through ``unit``; returns ``(outputs, traffic)``."""
+def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, progress=None,
+                 uniforms=None):
+    """Run every row of ``inputs`` through ``unit`` (its uniform ports held at ``uniforms``);
+    returns ``(outputs, traffic)``."""
     fin, fout = fields_of(unit)
     many = hasattr(unit, "busy")
     traffic = Traffic(pack(fin, inputs), p_valid=p_valid, p_ready=p_ready, seed=seed,
@@ -18,6 +20,8 @@ def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, pr
     busy = unit.busy if many else unit.o.valid
 
     async def bench(ctx):
+        for f in unit.uniforms:
+            ctx.set(getattr(unit, f"u_{f.name}"), int(uniforms[f.name]))
         while not traffic.done:
             valid, payload, ready = traffic.drive()
             ctx.set(unit.i.valid, valid)

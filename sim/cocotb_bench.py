@@ -39,6 +39,8 @@ async def stream_vectors(dut):
     dut.o_ready.value = 0
     for port in in_ports:
         port.value = 0
+    for u in spec["uniforms"]:                       # held for the whole run
+        getattr(dut, f"u_{u['name']}").value = u["value"] & ((1 << u["width"]) - 1)
     for _ in range(2):
         await RisingEdge(dut.clk)
     await FallingEdge(dut.clk)

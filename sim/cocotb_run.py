@@ -95,7 +95,7 @@ def _log_tail(path):
 
 
 def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=0,
-               waves=None, progress=None):
+               waves=None, progress=None, uniforms=None):
     """Run every row of ``inputs`` through the Verilog of unit ``name``.
 
     ``waves``: a path without suffix; the simulator's trace (FST from Icarus, VCD from
@@ -107,7 +107,8 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
     spec = {"inputs": [f.describe() for f in unit.inputs],
             "outputs": [f.describe() for f in unit.outputs],
             "p_valid": p_valid, "p_ready": p_ready, "seed": seed,
-            "many": bool(unit.status_ports)}
+            "many": bool(unit.status_ports),
+            "uniforms": [{**f.describe(), "value": int(uniforms[f.name])} for f in unit.uniforms]}
     with tempfile.TemporaryDirectory(dir=build_dir.parent) as tmp:
         tmp = Path(tmp)
         (tmp / "spec.json").write_text(json.dumps(spec))

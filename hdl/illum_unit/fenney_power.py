@@ -27,12 +27,26 @@ class FenneyPower(Unit):
     latency = 4
 
     def datapath(self, p, v):
-        v = dict(v)
-        x, c = v.pop("x"), v.pop("c")
-        v = p.stage({**v, "c": c, "t": (c + 8) * (ONE - x)})        # k * (1023 - X)
-        t = v.pop("t")
-        big = (t >> 3) > ONE
-        v = p.stage({**v, "l": Mux(big, 0, ONE - (t >> 3))[:10]})   # L
-        v = p.stage({**v, "q": (v["l"] * v["l"]) >> 10})             # Q
-        l, q, c = v.pop("l"), v.pop("q"), v.pop("c")
-        return p.stage({**v, "p": (l + ((c * (q - l)) >> 8))[:10]})  # P
+        return power_lanes(p, v, [("x", "c", "p")])
+
+
+def power_lanes(p, v, lanes):
+    """P(X, C) for several ``(x_key, c_key, p_key)`` side by side on one pipeline (4 stages);
+    the ``x`` and ``c`` values are consumed."""
+    v = dict(v)
+    first = {}
+    for k, (x, c, _) in enumerate(lanes):
+        first[f"_t{k}"] = (v[c] + 8) * (ONE - v.pop(x))                # k * (1023 - X)
+        first[f"_c{k}"] = v.pop(c)
+    v = p.stage(v, **first)
+    new = {}
+    for k in range(len(lanes)):
+        t = v.pop(f"_t{k}")
+        new[f"_l{k}"] = Mux((t >> 3) > ONE, 0, ONE - (t >> 3))[:10]          # L
+    v = p.stage(v, **new)
+    v = p.stage(v, **{f"_q{k}": (v[f"_l{k}"] * v[f"_l{k}"]) >> 10 for k in range(len(lanes))})
+    out = {}
+    for k, (_, _, key) in enumerate(lanes):
+        l, q, c = v.pop(f"_l{k}"), v.pop(f"_q{k}"), v.pop(f"_c{k}")
+        out[key] = (l + ((c * (q - l)) >> 8))[:10]                                     # P
+    return p.stage(v, **out)

@@ -46,18 +46,19 @@ def _ctype(width):
 
 def ports_header(unit):
     """The per-unit glue: field values <-> the model's named ports."""
-    fin, fout = unit.inputs, unit.outputs
-    for f in (*fin, *fout):
+    fin, fout, funi = unit.inputs, unit.outputs, unit.uniforms
+    for f in (*fin, *fout, *funi):
         if f.fmt.width > 64:
             raise BatchError(f"{unit.NAME}.{f.name}: fields wider than 64 bits are not supported")
     lines = [f"#define N_IN {len(fin)}", f"#define N_OUT {len(fout)}",
-             f"#define MANY {int(bool(unit.status_ports))}",
-             "static inline void set_inputs(Vtop* t, const int64_t* r) {"]
-    for k, f in enumerate(fin):
-        mask = (1 << f.fmt.width) - 1
-        lines.append(f"    t->i_{f.name} = ({_ctype(f.fmt.width)})((uint64_t)r[{k}] & "
-                     f"{mask:#x}ULL);")
-    lines.append("}")
+             f"#define MANY {int(bool(unit.status_ports))}", f"#define N_UNI {len(funi)}"]
+    for func, prefix, fields in (("set_inputs", "i", fin), ("set_uniforms", "u", funi)):
+        lines.append(f"static inline void {func}(Vtop* t, const int64_t* r) {{")
+        for k, f in enumerate(fields):
+            mask = (1 << f.fmt.width) - 1
+            lines.append(f"    t->{prefix}_{f.name} = ({_ctype(f.fmt.width)})((uint64_t)r[{k}] & "
+                         f"{mask:#x}ULL);")
+        lines.append("}")
     lines.append("static inline void get_outputs(Vtop* t, int64_t* r) {")
     for k, f in enumerate(fout):
         get = f"(uint64_t)t->o_{f.name}"
@@ -107,9 +108,9 @@ def build(name, params, *, trace=False):
 
 
 def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=None,
-              window=None, progress=None):
+              window=None, progress=None, uniforms=None):
     """Every row of ``inputs`` through the unit's Verilated model; ``(outputs, info)`` as the
-    other simulators give them. ``waves``: a path without suffix for a VCD of the cycles in
+    other simulators give them. ``uniforms``: the values of the unit's uniform ports. ``waves``: a path without suffix for a VCD of the cycles in
     ``window`` (first, last; default the whole run). (FST would need the system's lz4.)"""
     exe = build(name, params, trace=bool(waves))
     unit = make_unit(name, spec=True, **params)
@@ -121,6 +122,7 @@ def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=N
         tmp = Path(tmp)
         with open(tmp / "in.bin", "wb") as f:
             np.uint64(n).tofile(f)
+            np.array([int((uniforms or {})[u.name]) for u in unit.uniforms], np.int64).tofile(f)
             np.ascontiguousarray(rows).tofile(f)
         cmd = [str(exe), str(tmp / "in.bin"), str(tmp / "out.bin"), repr(float(p_valid)),
                repr(float(p_ready)), str(int(seed))]

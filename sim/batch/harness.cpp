@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
     FILE* f = fopen(argv[1], "rb");
     uint64_t n = 0;
     if (!f || fread(&n, 8, 1, f) != 1) fail("cannot read the input file", 0);
+    std::vector<int64_t> uni(N_UNI + 1);
+    if (N_UNI && fread(uni.data(), 8, N_UNI, f) != N_UNI) fail("short input file", 0);
     std::vector<int64_t> in(n * N_IN + 1);
     if (n && fread(in.data(), 8, n * N_IN, f) != n * N_IN) fail("short input file", 0);
     fclose(f);
@@ -78,6 +80,7 @@ int main(int argc, char** argv) {
         if (tfp && cycle >= trace_first && cycle <= trace_last) tfp->dump(2 * cycle + clk);
 #endif
     };
+    set_uniforms(top, uni.data());
     top->rst = 1;
     top->i_valid = 0;
     top->o_ready = 0;

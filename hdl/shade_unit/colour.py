@@ -1,0 +1,71 @@
+"""``colour``: ambient + sum over lights of (kd x max(0, d) x colour + ks x p), to 8-bit RGB
+(scenes.md, "Lighting").
+
+Per channel c, with the coefficients the driver folds (``COEF``: ambient x colour_c,
+kd x light_c x colour_c, ks x light_c)::
+
+    S = amb_c << 14 + sum_k kd_k,c x clamp(d_k, 0, 1) + (ks_k,c x p_k) << 4     (2^-24 units)
+    level = min(255, (255 S + 2^23) >> 24)                                      round half up
+
+Exact integer arithmetic: the golden model is bit-exact. 255 S is (S << 8) - S, no multiplier.
+Multipliers: 3 per light for diffuse, 3 more for specular (12 x 15 and 12 x 11 bits), their
+products registered. Latency 3: products, sum, level.
+"""
+from amaranth.hdl import Mux
+
+from ..fixed import Field
+from ..unit import Unit
+from .formats import COEF, LEVEL, ONE, POWER, RGB, colour_fields, light_fields
+
+FRAC = 24           # the sum's fraction bits: COEF (10) + VALUE (14)
+
+
+def colour_lanes(p, v, lights, specular):
+    """Consumes ``d<k>``, ``p<k>`` and the coefficient fields; gives ``r``, ``g``, ``b``."""
+    v = dict(v)
+    dc = {k: (lambda d: Mux(d < 0, 0, Mux(d > ONE, ONE, d)))(v.pop(f"d{k}"))
+          for k in range(lights)}
+    prods = {f"_a{c}": v.pop(f"amb_{c}") << FRAC - COEF.frac_bits for c in RGB}
+    for k in range(lights):
+        pk = v.pop(f"p{k}") if specular else None
+        for c in RGB:
+            prods[f"_d{k}{c}"] = v.pop(f"kd{k}_{c}") * dc[k][:15]
+            if specular:
+                prods[f"_s{k}{c}"] = (v.pop(f"ks{k}_{c}") * pk) << FRAC - COEF.frac_bits \
+                    - POWER.frac_bits
+    v = p.stage(v, **prods)
+    sums = {}
+    for c in RGB:
+        terms = [v.pop(f"_a{c}")] + [v.pop(f"_{t}{k}{c}") for k in range(lights)
+                                     for t in ("d", "s") if specular or t == "d"]
+        total = terms[0]
+        for t in terms[1:]:
+            total = total + t
+        sums[f"_S{c}"] = total
+    v = p.stage(v, **sums)
+    out = {}
+    for c in RGB:
+        s = v.pop(f"_S{c}")
+        level = ((s << 8) - s + (1 << FRAC - 1)) >> FRAC
+        out[c] = Mux(level > LEVEL.max, LEVEL.max, level)[:LEVEL.width]
+    return p.stage(v, **out)
+
+
+class Colour(Unit):
+    NAME = "colour"
+    DOC = "Ambient + per light kd d colour + ks p, summed and clamped, to 8-bit RGB"
+    PARAMS = {"lights": 1, "specular": True}
+    RANGES = {"lights": (1, 4)}
+    latency = 3
+
+    @property
+    def inputs(self):
+        q = self.params
+        return (light_fields(q["lights"], True, "d")
+                + [Field(f"p{k}", POWER) for k in range(q["lights"]) if q["specular"]]
+                + colour_fields(q["lights"], q["specular"]))
+
+    outputs = tuple(Field(c, LEVEL) for c in RGB)
+
+    def datapath(self, p, v):
+        return colour_lanes(p, v, self.params["lights"], self.params["specular"])

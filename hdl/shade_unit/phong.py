@@ -1,0 +1,98 @@
+"""``phong``: per-pixel Phong shading's normalisation (seed 000 eq 33-45; Duff): the
+interpolated normal n in, d = n.L / |n| and s = n.H / |n| out, for each light.
+
+    stage 1        q = n.n, and each n.L, n.H, exactly (products of s16 values)
+    stage 2        q -> m in [1, 4) by an even left shift 2e (a leading-one search)
+    rsqrt          g ~ 2^15 / sqrt(m): a table seed and Newton-Raphson steps (hdl.arith)
+    final          d = (n.L) g 2^e, rounded to VALUE and saturated
+
+1/|n| = 2^e / sqrt(m). |n|^2 is floored at 1/16 (|n| >= 1/4): an interpolated normal that short
+comes only from vertex normals more than 150 deg apart, and the floor keeps the shift to
+e in 0..2. The dot products are rounded to 17 bits (15 fraction bits) before the last multiply,
+so it fits one 18 x 18 multiplier.
+
+Multipliers: 3 for n.n, 3 per vector (L, and H with specular), 3 per Newton-Raphson step, one
+per output.
+"""
+from amaranth.hdl import Cat, Const, Mux, signed
+
+from .. import arith
+from ..fixed import Field
+from ..setup_unit.formats import VALUE
+from ..unit import Unit
+from .formats import light_fields
+
+Q_BITS = 22         # n.n with 20 fraction bits: [1/16, 4) -> bits 16..21
+Q_FRAC = 20
+Q_FLOOR = 1 << (Q_FRAC - 4)             # |n|^2 >= 1/16
+G_FRAC = 15                             # 1/sqrt(m) in (1/2, 1], 15 fraction bits
+DOT_FRAC = 15                           # n.L before the last multiply: s17, [-2, 2)
+
+
+def phong_stages(iters):
+    return 2 + arith.rsqrt_stages(iters) + 1
+
+
+def phong_lanes(p, v, vectors, iters, seed_bits=8):
+    """Normalise ``nx, ny, nz`` against each of ``vectors`` (``(vx, vy, vz, out)`` keys);
+    consumes the normal and the vectors, gives each ``out``."""
+    v = dict(v)
+    n = [v.pop(k) for k in ("nx", "ny", "nz")]
+    frac2 = 2 * VALUE.frac_bits
+    dots = {}
+    for *keys, out in vectors:
+        vec = [v.pop(k) for k in keys]
+        dots[f"_dot_{out}"] = n[0] * vec[0] + n[1] * vec[1] + n[2] * vec[2]
+    v = p.stage(v, _q=(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) >> frac2 - Q_FRAC, **dots)
+    # dot products: round to DOT_FRAC fraction bits, saturate to s17
+    lim = (1 << DOT_FRAC + 1) - 1
+    new = {}
+    for *_, out in vectors:
+        d = (v.pop(f"_dot_{out}") + (1 << frac2 - DOT_FRAC - 1)) >> frac2 - DOT_FRAC
+        new[f"_dot_{out}"] = Mux(d > lim, lim, Mux(d < -lim - 1, -lim - 1, d))[:DOT_FRAC + 2] \
+            .as_signed()
+    q = v.pop("_q")
+    q = Mux(q < Q_FLOOR, Q_FLOOR, q)[:Q_BITS]
+    # even shift: leading one at bit 20 or 21 -> e = 0; 18-19 -> 1; 16-17 -> 2
+    e = Mux(q[Q_BITS - 2:].any(), 0, Mux(q[Q_BITS - 4:Q_BITS - 2].any(), 1, 2))
+    v = p.stage(v, _m=(q << (2 * e))[:Q_BITS], _e=e, **new)
+    v = arith.rsqrt(p, v, "_m", Q_BITS, G_FRAC, iters, seed_bits, out="_g")
+    v.pop("_m")
+    g, e = v.pop("_g"), v.pop("_e")
+    shift = DOT_FRAC + G_FRAC - VALUE.frac_bits
+    out = {}
+    for *_, key in vectors:
+        prod = (v.pop(f"_dot_{key}") * g) << e
+        r = (prod + (1 << shift - 1)) >> shift
+        out[key] = Mux(r > VALUE.max, VALUE.max, Mux(r < VALUE.min, VALUE.min, r))[:VALUE.width]
+    return p.stage(v, **out)
+
+
+class Phong(Unit):
+    NAME = "phong"
+    DOC = "Per-pixel Phong: the interpolated normal normalised, dotted with each L and H"
+    PARAMS = {"lights": 1, "specular": True, "rsqrt_iters": 2}
+    RANGES = {"lights": (1, 4), "rsqrt_iters": (1, 3)}
+
+    @property
+    def inputs(self):
+        q = self.params
+        return ([Field(f"n{a}", VALUE) for a in "xyz"]
+                + [Field(f"{t}{k}{a}", VALUE) for k in range(q["lights"])
+                   for t in ("l", "h") if q["specular"] or t == "l" for a in "xyz"])
+
+    @property
+    def outputs(self):
+        return light_fields(self.params["lights"], self.params["specular"], "d", "s")
+
+    @property
+    def latency(self):
+        return phong_stages(self.params["rsqrt_iters"])
+
+    def vectors(self):
+        q = self.params
+        return [(f"{t}{k}x", f"{t}{k}y", f"{t}{k}z", f"{o}{k}") for k in range(q["lights"])
+                for t, o in (("l", "d"), ("h", "s")) if q["specular"] or t == "l"]
+
+    def datapath(self, p, v):
+        return phong_lanes(p, v, self.vectors(), self.params["rsqrt_iters"])

@@ -1,0 +1,63 @@
+"""``power_table``: the specular power max(0, s)^n from one table (the scene's ``power =
+"table"``).
+
+The table is addressed by t = 1 - s (s clamped to [0, 1]) in floating-point bins
+(``hdl.lut.float_bins``): ``mant_bits`` bins per octave of t, uniform bins of one input LSB
+below 2^-(14 - mant_bits). x^n is steep near x = 1, where t is small and the bins are fine, so
+the error is about the same for every n: about e^-1 / 2^(mant_bits + 1) of full scale at most
+(``Lut.max_error`` states it exactly). mant_bits = 6: 640 entries of 11 bits, one block RAM.
+Latency 2: the address is registered, then the ROM's output.
+"""
+import functools
+
+import numpy as np
+from amaranth.hdl import Mux
+
+from ..fixed import Field
+from ..lut import build_lut, float_address, float_bins, rom
+from ..setup_unit.formats import VALUE
+from ..unit import Unit
+from .formats import ONE, POWER
+
+EXP_HI = 1          # t reaches 1.0 (s <= 0): the top octave is [1, 2)
+
+
+def power_bins(mant_bits):
+    """The table's bins over t = 1 - s: (exp_lo, edges)."""
+    exp_lo = VALUE.frac_bits - mant_bits
+    return exp_lo, float_bins(exp_lo, EXP_HI, mant_bits)
+
+
+@functools.lru_cache(maxsize=None)
+def power_lut(shininess, mant_bits):
+    _, edges = power_bins(mant_bits)
+    return build_lut(lambda t: np.maximum(0.0, 1.0 - t) ** shininess,
+                     (len(edges) - 2).bit_length(), POWER, edges=edges)
+
+
+def power_lanes(p, v, lanes, shininess, mant_bits):
+    """max(0, s)^n for several ``(s_key, p_key)`` side by side (2 stages); ``s`` is consumed."""
+    lut = power_lut(float(shininess), mant_bits)
+    exp_lo, _ = power_bins(mant_bits)
+    addr = {}
+    for s, _ in lanes:
+        x = v.pop(s)
+        t = ONE - Mux(x < 0, 0, Mux(x > ONE, ONE, x))                  # 1 - clamp(s, 0, 1)
+        addr[f"_a_{s}"] = float_address(t.as_unsigned()[:VALUE.frac_bits + 1],
+                                        VALUE.frac_bits, exp_lo, EXP_HI, mant_bits)
+    v = p.stage(v, **addr)
+    return p.stage(v, **{out: rom(p, lut, v.pop(f"_a_{s}"), "power") for s, out in lanes})
+
+
+class PowerTable(Unit):
+    NAME = "power_table"
+    DOC = "Specular power max(0, s)^n from one table in floating-point bins of 1 - s"
+    PARAMS = {"shininess": 32.0, "mant_bits": 6}
+    RANGES = {"shininess": (1.0, 1024.0), "mant_bits": (3, 8)}
+    inputs = (Field("s", VALUE),)
+    outputs = (Field("p", POWER),)
+    latency = 2
+
+    def datapath(self, p, v):
+        return power_lanes(p, v, [("s", "p")], self.params["shininess"],
+                           self.params["mant_bits"])
