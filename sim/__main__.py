@@ -135,11 +135,40 @@ def trace_args(args):
 def cmd_verilog(args):
     from .verilog import BUILD, export, lint
     out_dir = args.out or BUILD / "verilog"
+    if args.scene:
+        from golden.scene import load, prepare
+        scene = load(args.scene)
+        module = f"scene_{scene['name']}"
+        if not module.isidentifier():
+            raise UsageError(f"{args.scene}: the scene's file name must make a Verilog "
+                             f"module name ({module!r} is not one)")
+        path = export("scene", prepare(scene)["params"], out_dir, module=module)
+        lint(path, module)
+        print(f"{path}  lint clean (verilator -Wall); ports: {path.with_suffix('.json')}")
+        return
     for name in UNITS:
         path = export(name, None, out_dir)
         lint(path, name)
         print(f"{path}  lint clean (verilator -Wall, accepted: see sim/verilog.py); "
               f"ports: {path.with_suffix('.json')}")
+
+
+def cmd_render(args):
+    from .render import render
+    size = None
+    if args.size:
+        w, sep, h = args.size.lower().partition("x")
+        if not (sep and w.isdigit() and h.isdigit()):
+            raise UsageError(f"--size must be WIDTHxHEIGHT, not {args.size!r}")
+        size = (int(w), int(h))
+    reason = available(args.simulator)
+    if reason:
+        raise UsageError(f"{args.simulator}: {reason}")
+    out = Path(args.out) if args.out else None
+    if out and (out.exists() and not out.is_dir() or not out.parent.is_dir()):
+        raise UsageError(f"--out {out}: must be a directory, or a new one in an existing "
+                         f"directory")
+    render(args.scene, args.out, args.simulator, size)
 
 
 def params_for(names, pairs, chosen):
@@ -227,8 +256,19 @@ def main(argv=None):
                         "is the simulator's)")
     p.add_argument("--trace-window", metavar="FIRST:LAST",
                    help="only these cycles (batch path), to open a failure in a viewer")
-    p = sub.add_parser("verilog", help="export and lint the Verilog of every unit")
+    p = sub.add_parser("verilog", help="export and lint the Verilog of every unit, or of a "
+                                       "scene's pipeline")
     p.add_argument("--out")
+    p.add_argument("--scene", metavar="SCENE.toml",
+                   help="the composed pipeline of this scene: build/verilog/scene_<name>.v")
+    p = sub.add_parser("render", help="render a scene through its pipeline's RTL, beside the "
+                                      "float model and the reference")
+    p.add_argument("scene", metavar="SCENE.toml")
+    p.add_argument("--out", metavar="DIR", help="default: build/render/<scene name>/")
+    p.add_argument("--simulator", choices=SIMS, default="verilator",
+                   help="verilator (the batch path, default) | amaranth | icarus | "
+                        "cocotb-verilator")
+    p.add_argument("--size", metavar="WxH", help="override the scene's image size")
     p = sub.add_parser("check", help="golden vectors through the RTL, or your outputs against "
                                      "golden; one verdict per unit")
     p.add_argument("unit", nargs="?", choices=sorted(UNITS))
@@ -252,7 +292,7 @@ def main(argv=None):
                 and not args.vectors.isdigit():
             raise UsageError(f"--vectors must be a number or 'all', not {args.vectors!r}")
         rc = {"units": cmd_units, "run": cmd_run, "verilog": cmd_verilog,
-              "check": cmd_check}[args.cmd](args)
+              "check": cmd_check, "render": cmd_render}[args.cmd](args)
     sys.exit(1 if rc else 0)
 
 

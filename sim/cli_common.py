@@ -11,6 +11,7 @@ import numpy as np
 
 from hdl.fixed import FieldError, check_arrays
 from hdl.units import ParamError
+from golden.scene import SceneError
 
 NPZ_MAGIC = (b"PK\x03\x04", b"PK\x05\x06")     # a zip (np.savez), or an empty zip
 NPY_MAGIC = b"\x93NUMPY"
@@ -110,7 +111,7 @@ def user_errors():
     """Report a user's mistake as ``error: ...`` with exit code 2, not a traceback."""
     try:
         yield
-    except (UsageError, FieldError, ParamError) as e:
+    except (UsageError, FieldError, ParamError, SceneError) as e:
         print(f"error: {e}", file=sys.stderr)
         sys.exit(2)
     except KeyboardInterrupt:

@@ -32,15 +32,17 @@ LINT_ACCEPTED = {
 }
 
 
-def export(name, params=None, out_dir=None):
-    """Write ``<out_dir>/<name>.v`` for a unit, with one port per field (top module ``name``,
-    the unit itself as ``<name>.core``), and ``<name>.json``, its field map; returns the
-    Verilog's path. Files whose text is unchanged are not rewritten."""
+def export(name, params=None, out_dir=None, module=None):
+    """Write ``<out_dir>/<module>.v`` for a unit, with one port per field (top module
+    ``module``, default the unit's name; the unit itself as ``<module>.core``), and
+    ``<module>.json``, its field map; returns the Verilog's path. Files whose text is
+    unchanged are not rewritten."""
     unit = make_unit(name, **(params or {}))
+    module = module or name
     out_dir = Path(out_dir or BUILD / "verilog")
     out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / f"{name}.v"
-    _write(path, verilog.convert(NamedPorts(unit), name=name, emit_src=False))
+    path = out_dir / f"{module}.v"
+    _write(path, verilog.convert(NamedPorts(unit), name=module, emit_src=False))
     _write(path.with_suffix(".json"), json.dumps(field_map(unit), indent=2) + "\n")
     return path
 
@@ -59,6 +61,10 @@ def field_map(unit):
         ports += [{"port": f"{side}_{f.name}", "direction": direction, "field": f.name,
                    **f.fmt.describe(), "value": _meaning(f.fmt)}
                   for f in fields]
+    for f in unit.uniforms:
+        ports.append({"port": f"u_{f.name}", "direction": "input", "field": f.name,
+                      **f.fmt.describe(), "value": _meaning(f.fmt),
+                      "role": "uniform: set before streaming, held"})
     for name in unit.status_ports:
         ports.append({"port": name, "direction": "output", "width": len(getattr(unit, name)),
                       "role": STATUS_ROLES.get(name, "status")})

@@ -1,0 +1,413 @@
+"""The scene driver (``design/scenes.md``): a scene file in, what the hardware takes out, and
+the two float images the RTL is compared with.
+
+- ``load(path)``: reads and validates a scene (``tomllib``); every error names the key.
+- ``prepare(scene)``: the mesh, transformed, projected and culled; per drawn triangle the
+  raster's inputs (raw screen coordinates, per-edge constants (Ni.Nj - 1)/2, the channels'
+  vertex values: depth, then N.L and N.H per light, or the normal for ``phong``); the pipeline's
+  parameters and uniforms.
+- ``model(prep)``: the same method through float models with the RTL's formats (``model.png``).
+- ``reference(prep)``: per-pixel Phong in float64 with the exact power (``reference.png``).
+
+Decisions where scenes.md is silent (docs/scenes.md lists them):
+- depth: the channel carries zmin / zc, zmin the nearest drawn vertex's zc, so it lies in
+  (0, 1] whatever the scene's scale; a larger value is nearer;
+- a triangle with a vertex beyond the raster's coordinate range (one screen outside the
+  screen on either side) is dropped, like one behind the near plane, and counted as culled;
+- d and s are clamped to [0, 1] per pixel before the colour sum and the power;
+- the screen is the smallest power of two holding the image; fragments outside the image are
+  discarded by the framebuffer.
+"""
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from hdl.scene import METHODS, ScenePipeline
+from hdl.setup_unit.formats import EDGE, VALUE, coord
+from hdl.shade_unit.formats import COEF, RGB
+
+from . import fenney, raster as raster_model, shade
+
+__all__ = ["SceneError", "load", "parse", "prepare", "model", "reference", "DEFAULTS"]
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be rendered: the message names the key."""
+
+
+BUMPS = ("none", "fenney_xz", "fenney_polar", "angular")
+DEFAULTS = {
+    "image": {"width": 256, "height": 256, "background": [0.0, 0.0, 0.0]},
+    "camera": {"eye": [0.0, -3.5, 2.5], "target": [0.0, 0.0, 0.0], "up": [0.0, 0.0, 1.0],
+               "fov_y": 40.0},
+    "mesh": {"shape": "torus", "major_radius": 1.0, "minor_radius": 0.5, "segments": [12, 12],
+             "rotate": [0.0, 0.0, 0.0], "translate": [0.0, 0.0, 0.0], "scale": 1.0},
+    "material": {"color": [0.9, 0.5, 0.2], "ambient": 0.1, "diffuse": 0.7, "specular": 0.4,
+                 "shininess": 32.0},
+    "lights": [{"type": "directional", "to_light": [-1.0, -1.0, 2.0],
+                "color": [1.0, 1.0, 1.0]}],
+    "shading": {"method": "xshading", "specular": True, "power": "table"},
+    "bump": {"method": "none", "map": "bricks", "size": 256, "repeat": [8.0, 2.0],
+             "depth": 1.0, "filter": "nearest"},
+}
+LIGHT = DEFAULTS["lights"][0]
+# Each key's kind and range: ("num", lo, hi) finite reals, ("int", lo, hi), ("vec", n, lo, hi)
+# n finite reals, ("ints", n, lo, hi), ("choice", options), ("bool",), ("str",).
+INF = math.inf
+RULES = {
+    "image": {"width": ("int", 16, 1024), "height": ("int", 16, 1024),
+              "background": ("vec", 3, 0.0, 1.0)},
+    "camera": {"eye": ("vec", 3, -INF, INF), "target": ("vec", 3, -INF, INF),
+               "up": ("vec", 3, -INF, INF), "fov_y": ("num", 1.0, 170.0)},
+    "mesh": {"shape": ("choice", ("torus", "sphere", "plane")),
+             "major_radius": ("num", 1e-6, INF), "minor_radius": ("num", 1e-6, INF),
+             "segments": ("ints", 2, 3, 256), "rotate": ("vec", 3, -INF, INF),
+             "translate": ("vec", 3, -INF, INF), "scale": ("num", 1e-6, INF)},
+    "material": {"color": ("vec", 3, 0.0, 1.0), "ambient": ("num", 0.0, 1.0),
+                 "diffuse": ("num", 0.0, 1.0), "specular": ("num", 0.0, 1.0),
+                 "shininess": ("num", 1.0, 1024.0)},
+    "lights": {"type": ("choice", ("directional",)), "to_light": ("vec", 3, -INF, INF),
+               "color": ("vec", 3, 0.0, 2.0)},
+    "shading": {"method": ("choice", METHODS), "specular": ("bool",),
+                "power": ("choice", ("table", "fenney"))},
+    "bump": {"method": ("choice", BUMPS), "map": ("str",), "size": ("int", 16, 4096),
+             "repeat": ("vec", 2, 1e-6, INF), "depth": ("num", 0.0, INF),
+             "filter": ("choice", ("nearest", "bilinear"))},
+}
+
+
+def _number(key, v, lo, hi, what="a finite number"):
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise SceneError(f"{key}: must be {what}, not {v!r}")
+    if not math.isfinite(v):
+        raise SceneError(f"{key}: must be {what}, not {v}")
+    if not lo <= v <= hi:
+        rng = f">= {lo:g}" if hi == INF else f"in {lo:g}..{hi:g}"
+        raise SceneError(f"{key}: must be {what} {rng}, not {v!r}")
+    return v
+
+
+def _value(key, rule, v):
+    kind = rule[0]
+    if kind == "num":
+        return float(_number(key, v, *rule[1:]))
+    if kind == "int":
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise SceneError(f"{key}: must be an integer, not {v!r}")
+        return _number(key, v, *rule[1:], what="an integer")
+    if kind in ("vec", "ints"):
+        n, lo, hi = rule[1:]
+        if not isinstance(v, list) or len(v) != n:
+            raise SceneError(f"{key}: must be a list of {n} numbers, not {v!r}")
+        if kind == "ints":
+            return [_value(f"{key}[{k}]", ("int", lo, hi), x) for k, x in enumerate(v)]
+        return [float(_number(f"{key}[{k}]", x, lo, hi)) for k, x in enumerate(v)]
+    if kind == "bool":
+        if not isinstance(v, bool):
+            raise SceneError(f"{key}: must be true or false, not {v!r}")
+        return v
+    if not isinstance(v, str):
+        raise SceneError(f"{key}: must be a string, not {v!r}")
+    if kind == "choice" and v not in rule[1]:
+        raise SceneError(f"{key}: must be one of {', '.join(rule[1])}, not {v!r}")
+    return v
+
+
+def _table(key, given, defaults, rules):
+    if not isinstance(given, dict):
+        raise SceneError(f"{key}: must be a table, not {given!r}")
+    unknown = sorted(set(given) - set(rules))
+    if unknown:
+        raise SceneError(f"{key}.{unknown[0]}: unknown key (known: {', '.join(rules)})")
+    return {k: _value(f"{key}.{k}", rules[k], given.get(k, defaults[k])) for k in rules}
+
+
+def parse(data, name="scene"):
+    """A validated scene (every key filled in) from a parsed TOML document."""
+    unknown = sorted(set(data) - set(DEFAULTS))
+    if unknown:
+        raise SceneError(f"{unknown[0]}: unknown table (known: {', '.join(DEFAULTS)})")
+    scene = {"name": name}
+    for key in DEFAULTS:
+        if key == "lights":
+            lights = data.get("lights", DEFAULTS["lights"])
+            if not isinstance(lights, list) or not lights:
+                raise SceneError("lights: must be one or more [[lights]] tables")
+            scene["lights"] = [_table(f"lights[{k}]", l, LIGHT, RULES["lights"])
+                               for k, l in enumerate(lights)]
+            for k, l in enumerate(scene["lights"]):
+                if not any(l["to_light"]):
+                    raise SceneError(f"lights[{k}].to_light: must not be the zero vector")
+        else:
+            scene[key] = _table(key, data.get(key, {}), DEFAULTS[key], RULES[key])
+    cam = scene["camera"]
+    f = np.subtract(cam["target"], cam["eye"])
+    if not np.linalg.norm(f) > 0:
+        raise SceneError("camera.target: must differ from camera.eye")
+    if not np.linalg.norm(np.cross(f, cam["up"])) > 1e-9 * np.linalg.norm(f):
+        raise SceneError("camera.up: must not be parallel to the view direction")
+    if scene["bump"]["method"] != "none":
+        raise SceneError(f"bump.method: {scene['bump']['method']!r} is not rendered yet "
+                         f"(bump scenes are issue 11); use \"none\"")
+    n = 1 + (3 if scene["shading"]["method"] == "phong" else
+             len(scene["lights"]) * (2 if scene["shading"]["specular"] else 1))
+    if n > 8:
+        raise SceneError(f"lights: {len(scene['lights'])} lights need {n} raster channels "
+                         f"(depth and N.L, N.H per light); the raster has at most 8")
+    return scene
+
+
+def load(path):
+    path = Path(path)
+    try:
+        text = path.read_bytes()
+    except OSError as e:
+        raise SceneError(f"{path}: cannot read the scene file ({e.strerror})") from None
+    try:
+        data = tomllib.loads(text.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
+        raise SceneError(f"{path}: not a valid TOML file: {e}") from None
+    return parse(data, path.stem)
+
+
+# ---- the mesh (world space) ------------------------------------------------------------------
+
+def _grid_triangles(m, n, wrap_i, wrap_j):
+    """Index triples of the quads (i, j), (i+1, j), (i+1, j+1), (i, j+1), split as scenes.md
+    says, over an (m x n) vertex grid (wrapping where asked)."""
+    ii = range(m if wrap_i else m - 1)
+    jj = range(n if wrap_j else n - 1)
+    idx = lambda i, j: (i % m) * n + (j % n)
+    tris = []
+    for i in ii:
+        for j in jj:
+            a, b, c, d = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
+            tris += [(a, b, c), (a, c, d)]
+    return np.array(tris)
+
+
+def mesh(scene):
+    """(positions, normals, triangles) in world space."""
+    msh = scene["mesh"]
+    m, n = msh["segments"]
+    if msh["shape"] == "torus":
+        R, r = msh["major_radius"], msh["minor_radius"]
+        phi, psi = np.meshgrid(2 * np.pi * np.arange(m) / m, 2 * np.pi * np.arange(n) / n,
+                               indexing="ij")
+        nrm = np.stack([np.cos(psi) * np.cos(phi), np.cos(psi) * np.sin(phi), np.sin(psi)], -1)
+        pos = np.stack([(R + r * np.cos(psi)) * np.cos(phi), (R + r * np.cos(psi)) * np.sin(phi),
+                        r * np.sin(psi)], -1)
+        tris = _grid_triangles(m, n, True, True)
+    elif msh["shape"] == "sphere":               # radius major_radius; j runs pole to pole
+        phi, th = np.meshgrid(2 * np.pi * np.arange(m) / m, np.pi * np.arange(n + 1) / n,
+                              indexing="ij")
+        nrm = np.stack([np.sin(th) * np.cos(phi), np.sin(th) * np.sin(phi), -np.cos(th)], -1)
+        pos = msh["major_radius"] * nrm
+        tris = _grid_triangles(m, n + 1, True, False)
+    else:                                        # plane: [-1, 1]^2 at z = 0, facing +z
+        x, y = np.meshgrid(np.linspace(-1, 1, m + 1), np.linspace(-1, 1, n + 1), indexing="ij")
+        pos = np.stack([x, y, np.zeros_like(x)], -1)
+        nrm = np.broadcast_to([0.0, 0.0, 1.0], pos.shape)
+        tris = _grid_triangles(m + 1, n + 1, False, False)
+    pos, nrm = pos.reshape(-1, 3), nrm.reshape(-1, 3)
+    rot = np.eye(3)
+    for axis, deg in enumerate(msh["rotate"]):
+        c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+        a, b = [k for k in range(3) if k != axis]
+        r = np.eye(3)
+        r[a, a], r[a, b], r[b, a], r[b, b] = c, -s, s, c
+        rot = r @ rot                            # x first, then y, then z
+    pos = pos @ rot.T * msh["scale"] + np.array(msh["translate"])
+    nrm = nrm @ rot.T
+    # drop triangles with a repeated vertex (the sphere's poles)
+    p = pos[tris]
+    area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=-1)
+    return pos, nrm, tris[area > 1e-12 * max(1.0, float(np.abs(pos).max()) ** 2)]
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _raw(x, fmt):
+    return np.clip(np.rint(np.asarray(x) * 2.0 ** fmt.frac_bits), fmt.min, fmt.max).astype(np.int64)
+
+
+def prepare(scene):
+    """Everything the hardware and the models take; see the module's docstring."""
+    img, cam, mat, sh = scene["image"], scene["camera"], scene["material"], scene["shading"]
+    W, H = img["width"], img["height"]
+    screen_bits = max(4, (max(W, H) - 1).bit_length())
+    sub_bits = ScenePipeline.PARAMS["sub_bits"]
+    pos, nrm, tris = mesh(scene)
+    eye = np.array(cam["eye"])
+    f = _unit(np.subtract(cam["target"], eye))
+    r = _unit(np.cross(f, cam["up"]))
+    u = np.cross(r, f)
+    rel = pos - eye
+    xc, yc, zc = rel @ r, rel @ u, rel @ f
+    k = (H / 2) / math.tan(math.radians(cam["fov_y"]) / 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sx, sy = W / 2 + k * xc / zc, H / 2 - k * yc / zc
+    p = pos[tris]
+    facing = np.einsum("ij,ij->i", p[:, 0] - eye, np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]))
+    near = (zc[tris] <= 0.1).any(1)
+    cfmt = coord(screen_bits, sub_bits)
+    lim = 2.0 ** (cfmt.width - 1 - sub_bits)
+    with np.errstate(invalid="ignore"):
+        outside = ~((np.abs(sx[tris] - 0) < lim) & (np.abs(sy[tris]) < lim)).all(1)
+    keep = (facing < 0) & ~near & ~outside
+    drawn = tris[keep]
+    # per-vertex lighting: viewer at infinity
+    V = _unit(np.subtract(cam["eye"], cam["target"]))
+    Ls = [_unit(l["to_light"]) for l in scene["lights"]]
+    Hs = [_unit(L + V) for L in Ls]
+    N = _unit(nrm)
+    zmin = float(zc[drawn].min()) if len(drawn) else 1.0
+    pipe = dict(screen_bits=screen_bits, sub_bits=sub_bits, method=sh["method"],
+                lights=len(Ls), specular=sh["specular"], power=sh["power"],
+                shininess=mat["shininess"])
+    if sh["power"] == "fenney" and sh["specular"]:
+        pipe["concentration"] = fenney_concentration(mat["shininess"])
+    spec = ScenePipeline.spec(**pipe)
+    vert = {"depth": zmin / zc, "nx": N[:, 0], "ny": N[:, 1], "nz": N[:, 2]}
+    for j, (L, Hv) in enumerate(zip(Ls, Hs)):
+        vert[f"d{j}"], vert[f"s{j}"] = N @ L, N @ Hv
+    inputs = {}
+    S = 1 << sub_bits
+    for c in range(3):
+        inputs[f"x{c}"] = np.rint(sx[drawn[:, c]] * S).astype(np.int64)
+        inputs[f"y{c}"] = np.rint(sy[drawn[:, c]] * S).astype(np.int64)
+    for name, (a, b) in (("e01", (0, 1)), ("e02", (0, 2)), ("e12", (1, 2))):
+        dots = np.einsum("ij,ij->i", N[drawn[:, a]], N[drawn[:, b]])
+        inputs[name] = np.minimum(_raw((dots - 1) / 2, EDGE), 0)
+    for ch, (name, _) in enumerate(spec.channels):
+        for c in range(3):
+            inputs[f"v{ch}_{c}"] = _raw(vert[name][drawn[:, c]], VALUE)
+    # uniforms: L and H (phong), and the colour coefficients
+    uni = {}
+    for j, (L, Hv) in enumerate(zip(Ls, Hs)):
+        for a in range(3):
+            uni[f"l{j}{'xyz'[a]}"], uni[f"h{j}{'xyz'[a]}"] = _raw(L[a], VALUE), _raw(Hv[a], VALUE)
+    col = np.array(mat["color"])
+    for ci, c in enumerate(RGB):
+        uni[f"amb_{c}"] = _raw(mat["ambient"] * col[ci], COEF)
+        for j, l in enumerate(scene["lights"]):
+            uni[f"kd{j}_{c}"] = _raw(mat["diffuse"] * l["color"][ci] * col[ci], COEF)
+            uni[f"ks{j}_{c}"] = _raw(mat["specular"] * l["color"][ci], COEF)
+    uni = {f.name: int(uni[f.name]) for f in spec.uniforms}
+    return {"scene": scene, "params": pipe, "pipeline": spec, "inputs": inputs,
+            "uniforms": uni, "size": (W, H),
+            "triangles": {"in": len(tris), "culled": int((~keep).sum()), "drawn": len(drawn)},
+            "float": {"sx": sx[drawn], "sy": sy[drawn], "inv_z": zmin / zc[drawn],
+                      "N": N[drawn], "L": Ls, "H": Hs}}
+
+
+def fenney_concentration(n):
+    """The concentration C whose fitted exponent (``golden.fenney.power_exponent``, least
+    squares over X = 1..1023) is nearest to n on a log scale. The fitted exponent grows with C,
+    so a bisection finds it; C = 0..255 covers n of about 1 to 300, and n beyond the ends
+    takes the end."""
+    fit = lambda c: math.log(fenney.power_exponent(c)[0])
+    lo, hi, target = 0, 255, math.log(n)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if fit(mid) < target else (lo, mid)
+    return min((lo, hi), key=lambda c: abs(fit(c) - target))
+
+
+# ---- images ----------------------------------------------------------------------------------
+
+def framebuffer(size, x, y, depth, rgb, background):
+    """The depth test and the frame: the largest depth wins, the earlier fragment on a tie
+    (fragments in stream order). Returns (image uint8 (H, W, 3), covered (H, W) bool)."""
+    W, H = size
+    x, y, depth = map(np.asarray, (x, y, depth))
+    ok = (x < W) & (y < H)
+    order = np.flatnonzero(ok)
+    pix = y[order] * W + x[order]
+    best = np.lexsort((order, -depth[order], pix))
+    first = np.ones(len(best), bool)
+    first[1:] = pix[best][1:] != pix[best][:-1]
+    win = order[best[first]]
+    img = np.empty((H, W, 3), np.uint8)
+    img[:] = np.rint(np.array(background) * 255).astype(np.uint8)
+    cov = np.zeros((H, W), bool)
+    img[y[win], x[win]] = rgb[win]
+    cov[y[win], x[win]] = True
+    return img, cov
+
+
+def _colour_float(scene, d, p):
+    """The colour sum of scenes.md in float: d (lights, n) clamped, p (lights, n) powers."""
+    mat = scene["material"]
+    col = np.array(mat["color"])
+    out = mat["ambient"] * col[None, :] + 0 * d[0][:, None]
+    for j, l in enumerate(scene["lights"]):
+        lc = np.array(l["color"])
+        out = out + lc * (mat["diffuse"] * np.clip(d[j], 0, 1)[:, None] * col
+                          + mat["specular"] * p[j][:, None])
+    return np.rint(255 * np.clip(out, 0, 1)).astype(np.uint8)
+
+
+def model(prep):
+    """The float model of the scene's method with the RTL's formats: the raster's float model
+    (golden.raster) from the same raw inputs, the shading units' models, the quantised
+    uniforms, the same depth test. Returns (image, covered, fragments)."""
+    scene, spec, q = prep["scene"], prep["pipeline"], prep["params"]
+    frag = raster_model.run(prep["inputs"], screen_bits=q["screen_bits"],
+                            sub_bits=q["sub_bits"], channels=len(spec.channels),
+                            modes=",".join(m for _, m in spec.channels))
+    ch = {name: frag[f"v{k}"] for k, (name, _) in enumerate(spec.channels)}
+    uni = prep["uniforms"]
+    lights = range(q["lights"])
+    if q["method"] == "phong":
+        inp = {k: np.rint(ch[k] * 2 ** VALUE.frac_bits) for k in ("nx", "ny", "nz")}
+        inp.update({k: np.full(len(frag["x"]), v) for k, v in uni.items()})
+        out, _ = shade.phong(inp, lights=q["lights"], specular=q["specular"])
+        ch.update({k: v * VALUE.lsb for k, v in out.items()})
+    if q["specular"]:
+        for j in lights:
+            s_raw = np.rint(ch[f"s{j}"] * 2 ** VALUE.frac_bits)
+            if q["power"] == "table":
+                ch[f"p{j}"] = shade.power_table(s_raw, q["shininess"], q["mant_bits"]) \
+                    if "mant_bits" in q else shade.power_table(s_raw, q["shininess"])
+            else:
+                x = np.clip(np.floor(s_raw / 16), 0, 1023)
+                ch[f"p{j}"] = fenney.power_int(x, q["concentration"])
+    inp = {f"d{j}": np.rint(ch[f"d{j}"] * 2 ** VALUE.frac_bits) for j in lights}
+    inp.update({f"p{j}": ch[f"p{j}"] for j in lights if q["specular"]})
+    inp.update(uni)
+    rgb = shade.colour(inp, lights=q["lights"], specular=q["specular"])
+    rgb = np.stack([rgb[c] for c in RGB], -1).astype(np.uint8)
+    img, cov = framebuffer(prep["size"], frag["x"], frag["y"], ch["depth"], rgb,
+                           scene["image"]["background"])
+    return img, cov, len(frag["x"])
+
+
+def reference(prep):
+    """Per-pixel Phong in float64, exact power: each covered pixel's normal interpolated
+    (affine in screen space) from the exact vertex normals at the exact projected vertices,
+    normalised; the same coverage and the depth test on the exact 1/z."""
+    scene, q, fl = prep["scene"], prep["params"], prep["float"]
+    x = np.stack([prep["inputs"][f"x{c}"] for c in range(3)], -1)
+    y = np.stack([prep["inputs"][f"y{c}"] for c in range(3)], -1)
+    tri, px, py = raster_model.coverage(x, y, q["sub_bits"], q["screen_bits"])
+    sx, sy = fl["sx"][tri], fl["sy"][tri]
+    cx, cy = px + 0.5, py + 0.5
+    det = (sx[:, 1] - sx[:, 0]) * (sy[:, 2] - sy[:, 0]) - (sx[:, 2] - sx[:, 0]) * (sy[:, 1] - sy[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b1 = ((cx - sx[:, 0]) * (sy[:, 2] - sy[:, 0]) - (sx[:, 2] - sx[:, 0]) * (cy - sy[:, 0])) / det
+        b2 = ((sx[:, 1] - sx[:, 0]) * (cy - sy[:, 0]) - (cx - sx[:, 0]) * (sy[:, 1] - sy[:, 0])) / det
+    w = np.stack([1 - b1 - b2, b1, b2], -1)
+    n = (w[..., None] * fl["N"][tri]).sum(1)
+    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+    d = [n @ L for L in fl["L"]]
+    p = [np.maximum(0, n @ Hv) ** scene["material"]["shininess"] if q["specular"]
+         else np.zeros(len(tri)) for Hv in fl["H"]]
+    rgb = _colour_float(scene, d, p)
+    depth = (w * fl["inv_z"][tri]).sum(1)
+    return framebuffer(prep["size"], px, py, depth, rgb, scene["image"]["background"])[:2]

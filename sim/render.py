@@ -1,0 +1,122 @@
+"""``python -m sim render SCENE.toml``: a scene through the RTL of its pipeline, beside the float
+model of the same method and the float64 reference (``design/scenes.md``, "What a render
+writes").
+
+The RTL streams fragments (x, y, depth, r, g, b); the depth test and the framebuffer are here,
+as a model of external memory (``hdl/scene.py`` says why).
+"""
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from golden import scene as S
+from hdl.units import make_unit
+
+from .verilog import BUILD
+
+__all__ = ["render", "compare", "gallery"]
+
+
+def compare(a, cov_a, b, cov_b):
+    """max_abs, psnr_db and pixels_over_1 over the pixels both cover (8-bit levels), and the
+    pixels only one covers."""
+    both = cov_a & cov_b
+    d = np.abs(a[both].astype(np.int64) - b[both].astype(np.int64))
+    mse = float(np.mean(d.astype(float) ** 2)) if d.size else 0.0
+    return {"max_abs": int(d.max()) if d.size else 0,
+            "psnr_db": round(10 * np.log10(255.0 ** 2 / mse), 2) if mse > 0 else float("inf"),
+            "pixels_over_1": int((d.max(-1) > 1).sum()) if d.size else 0,
+            "coverage_mismatch": int((cov_a ^ cov_b).sum())}
+
+
+def save_png(path, img):
+    from PIL import Image
+    Image.fromarray(img).save(path)
+
+
+def save_diff(path, rtl, ref, cov, title):
+    """|rtl - reference| (largest over R, G, B) as a heat map with its scale."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    d = np.abs(rtl.astype(int) - ref.astype(int)).max(-1).astype(float)
+    d[~cov] = np.nan
+    h, w = d.shape
+    fig, ax = plt.subplots(figsize=(4 + 1.2, 4 * h / w), dpi=100)
+    im = ax.imshow(d, cmap="inferno", vmin=0, vmax=max(1.0, np.nanmax(d) if cov.any() else 1))
+    ax.set_title(title, fontsize=9)
+    ax.set_axis_off()
+    fig.colorbar(im, ax=ax, label="|RTL - reference|, 8-bit levels")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=False):
+    """Render a scene; writes the five files of scenes.md and returns the metrics."""
+    from .__main__ import simulate
+    scene = S.load(scene_path)
+    if size:
+        scene["image"]["width"], scene["image"]["height"] = size
+        scene = S.parse({k: v for k, v in scene.items() if k != "name"}, scene["name"])
+    out_dir = Path(out_dir or BUILD / "render" / scene["name"])
+    out_dir.mkdir(parents=True, exist_ok=True)
+    prep = S.prepare(scene)
+    pipe, params = prep["pipeline"], prep["params"]
+    if simulator == "verilator":                # build (or find) the model before timing
+        from .batch import build
+        build("scene", params)
+    elif simulator != "amaranth":
+        from .cocotb_run import build
+        build("scene", params, simulator)
+    t0 = time.time()
+    frags, info = simulate("scene", params, prep["inputs"], simulator,
+                           uniforms=prep["uniforms"], progress=None if quiet else
+                           f"scene {scene['name']}")
+    wall = time.time() - t0
+    rgb = np.stack([frags[c] for c in "rgb"], -1).astype(np.uint8)
+    rtl, cov = S.framebuffer(prep["size"], frags["x"], frags["y"], frags["depth"], rgb,
+                             scene["image"]["background"])
+    model, mcov, n_model = S.model(prep)
+    ref, rcov = S.reference(prep)
+    save_png(out_dir / "rtl.png", rtl)
+    save_png(out_dir / "model.png", model)
+    save_png(out_dir / "reference.png", ref)
+    vs_ref = compare(rtl, cov, ref, rcov)
+    save_diff(out_dir / "diff.png", rtl, ref, cov & rcov,
+              f"{scene['name']}: {params['method']}, RTL vs reference: "
+              f"{vs_ref['psnr_db']} dB, max {vs_ref['max_abs']}")
+    n = len(frags["x"])
+    drawn = prep["triangles"]["drawn"]
+    units = [{"name": name, "why": why, "params": p,
+              "latency": make_unit(name, spec=True, **p).latency,
+              "items_in": drawn if name == "raster" else n, "items_out": n}
+             for name, p, why in pipe.parts()]
+    metrics = {"scene": scene["name"], "method": params["method"],
+               "bump": scene["bump"]["method"], "simulator": simulator,
+               "size": list(prep["size"]), "triangles": prep["triangles"],
+               "fragments": n, "fragments_model": n_model, "cycles": info["cycles"],
+               "latency": info["latency"], "rtl_wall_s": round(wall, 3),
+               "sim_px_per_s": round(n / wall, 1) if wall > 0 else None,
+               "pipeline": {"params": params, "latency": pipe.latency,
+                            "uniforms": prep["uniforms"]},
+               "units": units,
+               "rtl_vs_model": compare(rtl, cov, model, mcov),
+               "rtl_vs_reference": {k: vs_ref[k] for k in ("psnr_db", "max_abs")},
+               "model_vs_reference": {k: v for k, v in compare(model, mcov, ref, rcov).items()
+                                      if k in ("psnr_db", "max_abs")}}
+    (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    if not quiet:
+        rm, rr = metrics["rtl_vs_model"], metrics["rtl_vs_reference"]
+        print(f"{scene['name']}: {drawn} triangles ({prep['triangles']['culled']} culled) -> "
+              f"{n:,} fragments, {info['cycles']:,} cycles, {wall:.1f} s on {simulator}; "
+              f"units: {', '.join(u['name'] for u in units)}\n"
+              f"  RTL vs model: max {rm['max_abs']} levels, {rm['pixels_over_1']} pixels over 1, "
+              f"coverage mismatch {rm['coverage_mismatch']}; RTL vs reference: "
+              f"{rr['psnr_db']} dB (model: {metrics['model_vs_reference']['psnr_db']} dB), "
+              f"max {rr['max_abs']}\n"
+              f"  wrote {', '.join(f'{out_dir}/{f}' for f in ('rtl.png', 'model.png', 'reference.png', 'diff.png', 'metrics.json'))}")
+    return metrics
