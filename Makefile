@@ -1,4 +1,4 @@
-# Two commands on a fresh clone: `make test` and `make sim`. Each installs what it needs first.
+# Two commands on a fresh clone: `make render` and `make test`. Each installs what it needs first.
 PYTHON  ?= python3
 VENV    := .venv
 PY      := $(VENV)/bin/python
@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup test verilog sim report accuracy recip-cost bench soak clean
+.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak clean
 
 setup: $(STAMP)
 
@@ -20,6 +20,17 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e .
 	touch $@
+
+# The main job: a scene through the RTL of the pipeline it calls for, beside the float model
+# and the reference: make render [SCENE=scenes/default.toml] [SIM=verilator|amaranth|icarus].
+# Writes build/render/<scene>/{rtl,model,reference,diff}.png and metrics.json.
+SCENE   ?= scenes/default.toml
+render: setup
+	$(PY) -m sim render $(SCENE) --simulator $(if $(filter command line,$(origin SIM)),$(SIM),verilator)
+
+# Every scene in scenes/, and one contact sheet: build/render/gallery.png.
+gallery: setup
+	$(PY) -m sim.render $(if $(filter command line,$(origin SIM)),$(SIM),verilator)
 
 # Every test: models, RTL on Amaranth's simulator, cocotb on Icarus and Verilator.
 test: setup

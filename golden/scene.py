@@ -67,7 +67,7 @@ RULES = {
              "translate": ("vec", 3, -INF, INF), "scale": ("num", 1e-6, INF)},
     "material": {"color": ("vec", 3, 0.0, 1.0), "ambient": ("num", 0.0, 1.0),
                  "diffuse": ("num", 0.0, 1.0), "specular": ("num", 0.0, 1.0),
-                 "shininess": ("num", 1.0, 1024.0)},
+                 "shininess": ("num", 1.0, INF)},
     "lights": {"type": ("choice", ("directional",)), "to_light": ("vec", 3, -INF, INF),
                "color": ("vec", 3, 0.0, 2.0)},
     "shading": {"method": ("choice", METHODS), "specular": ("bool",),
@@ -79,12 +79,9 @@ RULES = {
 
 
 def _number(key, v, lo, hi, what="a finite number"):
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise SceneError(f"{key}: must be {what}, not {v!r}")
-    if not math.isfinite(v):
-        raise SceneError(f"{key}: must be {what}, not {v}")
-    if not lo <= v <= hi:
-        rng = f">= {lo:g}" if hi == INF else f"in {lo:g}..{hi:g}"
+    rng = f">= {lo:g}" if hi == INF else f"in {lo:g}..{hi:g}"
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+            or not lo <= v <= hi:
         raise SceneError(f"{key}: must be {what} {rng}, not {v!r}")
     return v
 

@@ -39,7 +39,7 @@ class ScenePipeline(Unit):
               "specular": True, "power": "table", "shininess": 32.0, "mant_bits": 6,
               "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
-              "power": ("table", "fenney"), "shininess": (1.0, 1024.0), "mant_bits": (3, 8),
+              "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
               "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "rsqrt_iters": (1, 3)}
     status_ports = {"busy": Out(1), "culled": Out(32)}

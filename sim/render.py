@@ -120,3 +120,44 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
               f"max {rr['max_abs']}\n"
               f"  wrote {', '.join(f'{out_dir}/{f}' for f in ('rtl.png', 'model.png', 'reference.png', 'diff.png', 'metrics.json'))}")
     return metrics
+
+
+def gallery(scenes_dir=None, simulator="verilator"):
+    """Render every scene in ``scenes/`` and write one contact sheet,
+    ``build/render/gallery.png``: each scene's RTL image labelled with its method and its PSNR
+    against the reference, and the default scene's reference."""
+    from PIL import Image, ImageDraw
+    scenes = sorted(Path(scenes_dir or Path(__file__).resolve().parent.parent / "scenes")
+                    .glob("*.toml"), key=lambda p: (p.stem != "default", p.stem))
+    tiles = []
+    for path in scenes:
+        m = render(path, simulator=simulator)
+        out = BUILD / "render" / m["scene"]
+        label = (f"{m['scene']}: {m['method']}"
+                 f"{', ' + m['pipeline']['params']['power'] if m['pipeline']['params']['specular'] else ', diffuse'}",
+                 f"{m['rtl_vs_reference']['psnr_db']} dB vs reference")
+        tiles.append((Image.open(out / "rtl.png").convert("RGB"), label))
+        if m["scene"] == "default":
+            tiles.append((Image.open(out / "reference.png").convert("RGB"),
+                          ("reference: per-pixel Phong,", "float64, exact power")))
+    w = max(t.width for t, _ in tiles)
+    h = max(t.height for t, _ in tiles)
+    cols = min(4, len(tiles))
+    rows = -(-len(tiles) // cols)
+    sheet = Image.new("RGB", (cols * w, rows * (h + 30)), "white")
+    draw = ImageDraw.Draw(sheet)
+    for k, (tile, label) in enumerate(tiles):
+        x, y = (k % cols) * w, (k // cols) * (h + 30)
+        sheet.paste(tile, (x, y))
+        draw.text((x + 4, y + h + 2), label[0], fill="black")
+        draw.text((x + 4, y + h + 15), label[1], fill="black")
+    path = BUILD / "render" / "gallery.png"
+    sheet.save(path)
+    print(f"wrote {path} ({len(scenes)} scenes)")
+    return path
+
+
+if __name__ == "__main__":
+    from .cli_common import user_errors
+    with user_errors():
+        gallery(simulator=sys.argv[1] if len(sys.argv) > 1 else "verilator")

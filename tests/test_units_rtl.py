@@ -20,7 +20,10 @@ CONFIGS = [("texel_decode", {}), ("fenney_power", {}), ("fenney_dot", {}),
            ("rotation", {"angle_bits": 10, "trig_bits": 12, "asin_bits": 10, "atan_bits": 6,
                          "prop_bits": 10}),
            ("rotation", {"method": "exact"}),
-           ("bump_polar", {})]
+           ("bump_polar", {}),
+           ("phong", {}),
+           ("power_table", {"shininess": 128.0}),
+           ("colour", {})]
 
 
 MANY = {"raster"}    # many outputs per input: tests/test_raster_rtl.py

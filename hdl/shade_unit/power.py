@@ -53,7 +53,7 @@ class PowerTable(Unit):
     NAME = "power_table"
     DOC = "Specular power max(0, s)^n from one table in floating-point bins of 1 - s"
     PARAMS = {"shininess": 32.0, "mant_bits": 6}
-    RANGES = {"shininess": (1.0, 1024.0), "mant_bits": (3, 8)}
+    RANGES = {"shininess": (1.0, 1e9), "mant_bits": (3, 8)}
     inputs = (Field("s", VALUE),)
     outputs = (Field("p", POWER),)
     latency = 2

@@ -1,0 +1,208 @@
+"""Scenes (design/scenes.md): the parser, the composition of the pipeline, renders through the
+RTL on every simulator against the float model, and the methods' image error.
+
+Bounds: the RTL image must cover exactly the model's pixels and stay within 1 level of it
+(the raster's values are within one LSB of 2^-14 of its float model, which moves the 8-bit
+colour by far less than a level except at a rounding edge). The methods' PSNR against the
+reference: the figures the issue measured with an independent renderer on the default torus
+(linear about 25 dB, X-shading about 44, exact mid-edges about 55), within 1 dB.
+"""
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from golden import scene as S
+from hdl.scene import ScenePipeline, units_in
+
+from .conftest import per_simulator
+
+SCENES = "scenes"
+
+
+def parse(text):
+    import tomllib
+    return S.parse(tomllib.loads(text), "t")
+
+
+def test_defaults_are_the_contract():
+    s = parse("")
+    for table, keys in S.DEFAULTS.items():
+        assert s[table] == keys, table
+    d = S.load(f"{SCENES}/default.toml")
+    assert (d["image"]["width"], d["shading"]["method"], d["bump"]["method"]) == \
+        (256, "xshading", "none")
+
+
+BAD = [
+    ("[material]\nshininess = nan", "material.shininess: must be a finite number >= 1"),
+    ("[material]\nshininess = 0.5", "material.shininess: must be a finite number >= 1, not 0.5"),
+    ("[material]\nshininess = inf", "material.shininess: must be a finite number >= 1, not inf"),
+    ("[material]\nshininess = \"shiny\"", "material.shininess: must be a finite number"),
+    ("[material]\ndiffuse = true", "material.diffuse: must be a finite number"),
+    ("[material]\ncolor = [1, 0]", "material.color: must be a list of 3 numbers"),
+    ("[material]\ncolor = [1, 0, -0.1]", "material.color[2]: must be"),
+    ("[material]\nglossy = 1", "material.glossy: unknown key"),
+    ("[lighting]\nx = 1", "lighting: unknown table"),
+    ("[image]\nwidth = 8", "image.width: must be an integer in 16..1024"),
+    ("[image]\nwidth = 64.5", "image.width: must be an integer"),
+    ("[mesh]\nshape = \"teapot\"", "mesh.shape: must be one of torus, sphere, plane"),
+    ("[mesh]\nsegments = [12, 2]", "mesh.segments[1]: must be an integer in 3..256"),
+    ("[shading]\nmethod = \"gouraud\"", "shading.method: must be one of"),
+    ("[shading]\nspecular = 1", "shading.specular: must be true or false"),
+    ("lights = []", "lights: must be one or more"),
+    ("[[lights]]\nto_light = [0, 0, 0]", "lights[0].to_light: must not be the zero vector"),
+    ("[[lights]]\ncolor = [1, 1, 3]", "lights[0].color[2]: must be a finite number in 0..2"),
+    ("[[lights]]\ntype = \"spot\"", "lights[0].type: must be one of directional"),
+    ("[camera]\nup = [0, 1, -0.7142857142857143]", "camera.up: must not be parallel"),
+    ("[camera]\neye = [0, 0, 0]", "camera.target: must differ from camera.eye"),
+    ("[bump]\nmethod = \"angular\"", "bump.method: 'angular' is not rendered yet"),
+    ("[image]\nwidth = 64\n[camera]\nfov_y = 180.0", "camera.fov_y: must be a finite number in 1..170"),
+    ("\n".join(["[[lights]]"] * 4), "lights: 4 lights need 9 raster channels"),
+]
+
+
+@pytest.mark.parametrize("text,message", BAD, ids=[m.split(":")[0] for _, m in BAD])
+def test_bad_scenes_name_the_key(text, message):
+    with pytest.raises(S.SceneError) as e:
+        parse(text)
+    assert message in str(e.value)
+
+
+def test_bad_files_exit_2_without_a_traceback(tmp_path):
+    (tmp_path / "bad.toml").write_text("[material\nshininess = 3")
+    (tmp_path / "nan.toml").write_text("[material]\nshininess = nan")
+    for path, msg in ((tmp_path / "bad.toml", "not a valid TOML file"),
+                      (tmp_path / "nan.toml", "material.shininess: must be a finite number"),
+                      (tmp_path / "missing.toml", "cannot read the scene file")):
+        r = subprocess.run([sys.executable, "-m", "sim", "render", str(path), "--simulator",
+                            "amaranth", "--out", str(tmp_path / "o")],
+                           capture_output=True, text=True)
+        assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr, r.stderr
+
+
+# ---- composition -----------------------------------------------------------------------------
+
+def _mul_cells(design):
+    from amaranth.back import rtlil
+    return rtlil.convert(design).count("cell $mul")
+
+
+@pytest.mark.parametrize("scene,units", [
+    ("default", ["colour", "power_table", "raster"]),
+    ("diffuse", ["colour", "raster"]),                       # specular = false: no power
+    ("fenney_power", ["colour", "fenney_power", "raster"]),
+    ("phong", ["colour", "phong", "power_table", "raster"]),
+    ("linear", ["colour", "power_table", "raster"]),
+])
+def test_each_scene_builds_only_its_units(scene, units):
+    prep = S.prepare(S.load(f"{SCENES}/{scene}.toml"))
+    design = ScenePipeline(**prep["params"])
+    assert units_in(design) == units
+    assert [p[0] for p in prep["pipeline"].parts()] == sorted(units, key=[
+        "raster", "phong", "power_table", "fenney_power", "colour"].index)
+
+
+def test_linear_builds_no_mid_edge_logic():
+    """A linear scene's raster interpolates linearly on every channel, so its setup has no
+    mid-edge terms: fewer multipliers than X-shading's, and no square root (exact's)."""
+    params = {m: S.prepare(S.load(f"{SCENES}/{m}.toml"))["params"]
+              for m in ("linear", "default", "exact")}
+    assert ScenePipeline.spec(**params["linear"]).parts()[0][1]["modes"] == "linear,linear,linear"
+    muls = {m: _mul_cells(ScenePipeline(**p)) for m, p in params.items()}
+    assert muls["linear"] < muls["default"] < muls["exact"], muls
+    assert "rsqrt_seed" not in _rtlil_text(params["default"])
+    assert "rsqrt_seed" in _rtlil_text(params["exact"])
+
+
+def _rtlil_text(params):
+    from amaranth.back import rtlil
+    return rtlil.convert(ScenePipeline(**params))
+
+
+def test_scene_verilog_is_lint_clean(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "sim", "verilog", "--scene",
+                        f"{SCENES}/default.toml", "--out", str(tmp_path)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "lint clean" in r.stdout and (tmp_path / "scene_default.v").exists()
+
+
+# ---- rendering -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("simulator,name", list(per_simulator(["scene"])))
+def test_small_scene_rtl_matches_model(simulator, name, tmp_path):
+    """The default scene at 64 x 64 through the RTL: exactly the model's pixels, every one
+    within 1 level; and the metrics scenes.md lists."""
+    from sim.render import render
+    m = render(f"{SCENES}/default.toml", tmp_path, simulator, (64, 64), quiet=True)
+    assert m["rtl_vs_model"]["coverage_mismatch"] == 0
+    assert m["rtl_vs_model"]["max_abs"] <= 1
+    assert m["fragments"] == m["fragments_model"] > 1000
+    assert m["triangles"] == {"in": 288, "culled": 152, "drawn": 136}
+    assert [u["name"] for u in m["units"]] == ["raster", "power_table", "colour"]
+    assert abs(m["rtl_vs_reference"]["psnr_db"] - m["model_vs_reference"]["psnr_db"]) <= 1
+    assert m["latency"] == ScenePipeline.spec(**m["pipeline"]["params"]).latency
+    for f in ("rtl.png", "model.png", "reference.png", "diff.png", "metrics.json"):
+        assert (tmp_path / f).stat().st_size > 0
+
+
+@pytest.mark.parametrize("scene", ["phong", "fenney_power", "sphere_two_lights", "diffuse"])
+def test_other_pipelines_on_amaranth(scene, tmp_path):
+    """Phong, Fenney's power, two lights and diffuse-only, at 48 x 48 on Amaranth's
+    simulator: the RTL against the model."""
+    from sim.render import render
+    m = render(f"{SCENES}/{scene}.toml", tmp_path, "amaranth", (48, 48), quiet=True)
+    assert m["rtl_vs_model"]["coverage_mismatch"] == 0
+    assert m["rtl_vs_model"]["max_abs"] <= 1
+    assert m["fragments"] > 300
+
+
+def test_one_pixel_triangle():
+    """A triangle that covers one pixel centre gives one fragment, coloured like the model."""
+    from sim.__main__ import simulate
+    prep = S.prepare(S.parse({"image": {"width": 32, "height": 32}}))
+    S_ = 1 << prep["params"]["sub_bits"]
+    one = {k: v[:1].copy() for k, v in prep["inputs"].items()}
+    for k, (x, y) in enumerate([(10 * S_ + 2, 10 * S_ + 2), (11 * S_ - 2, 10 * S_ + 4),
+                                (10 * S_ + 4, 11 * S_ - 2)]):
+        one[f"x{k}"][:], one[f"y{k}"][:] = x, y
+    prep = {**prep, "inputs": one}
+    out, _ = simulate("scene", prep["params"], one, "amaranth", uniforms=prep["uniforms"])
+    assert (list(out["x"]), list(out["y"])) == ([10], [10])
+    img, cov, n = S.model(prep)
+    assert n == 1 and cov.sum() == 1
+    assert np.abs(img[10, 10].astype(int) - [out[c][0] for c in "rgb"]).max() <= 1
+
+
+@pytest.mark.parametrize("method,expected", [("linear", 25), ("xshading", 44), ("exact", 55)])
+def test_method_error_on_the_default_torus(method, expected):
+    """The float model of each method against the reference, on the default 256 x 256 torus,
+    beside the issue's independent measurements ("about" 25, 44 and 55 dB), within 1.5 dB:
+    measured here 24.7, 44.1 and 54.0 (54.1 with the exact power instead of the table, so the
+    last dB is not the hardware's formats)."""
+    from sim.render import compare
+    scene = S.load(f"{SCENES}/default.toml")
+    scene["shading"]["method"] = method
+    prep = S.prepare(scene)
+    img, cov, _ = S.model(prep)
+    ref, rcov = S.reference(prep)
+    assert abs(compare(img, cov, ref, rcov)["psnr_db"] - expected) <= 1.5
+
+
+def test_phong_model_reaches_50_db():
+    from sim.render import compare
+    prep = S.prepare(S.load(f"{SCENES}/phong.toml"))
+    img, cov, _ = S.model(prep)
+    ref, rcov = S.reference(prep)
+    assert compare(img, cov, ref, rcov)["psnr_db"] >= 50
+
+
+def test_fenney_concentration_fits_the_exponent():
+    """C from the fit: its fitted exponent within 10 % of n, where the range allows."""
+    from golden.fenney import power_exponent
+    for n in (8.0, 32.0, 100.0):
+        c = S.fenney_concentration(n)
+        assert abs(math.log(power_exponent(c)[0] / n)) < 0.1, (n, c)
