@@ -64,7 +64,8 @@ def phong_lanes(p, v, vectors, iters, seed_bits=8):
     for *_, key in vectors:
         prod = (v.pop(f"_dot_{key}") * g) << e
         r = (prod + (1 << shift - 1)) >> shift
-        out[key] = Mux(r > VALUE.max, VALUE.max, Mux(r < VALUE.min, VALUE.min, r))[:VALUE.width]
+        out[key] = Mux(r > VALUE.max, VALUE.max, Mux(r < VALUE.min, VALUE.min, r))[:VALUE.width] \
+            .as_signed()
     return p.stage(v, **out)
 
 
