@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak clean
+.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga clean
 
 setup: $(STAMP)
 
@@ -50,6 +50,14 @@ sim: setup
 # Hardware counts of every unit from Yosys (multipliers, adders, tables), beside the seeds'.
 report: setup
 	$(PY) -m sim.report
+
+# Place and route of every unit and the default scene's pipeline in a serial wrapper, on
+# ECP5-25F -6 and iCE40 UP5K, 5 seeds: Fmax (median, min-max), utilisation, critical path.
+# Writes build/fpga/fpga.{json,md}; unchanged designs come from build/fpga/cache/.
+# make fpga [UNIT=a,b] [SEEDS=n]
+SEEDS   ?= 5
+fpga: setup
+	$(PY) -m sim.fpga --seeds $(SEEDS) $(if $(UNIT),--units $(UNIT))
 
 # Method errors (Fenney units, seed 003's rotation) with plots in build/accuracy/.
 accuracy: setup
