@@ -104,7 +104,9 @@ class Pipeline:
         out = {}
         for name, value in {**v, **new}.items():
             value = Value.cast(value)
-            reg = Signal(value.shape(), name=f"s{self.stages}_{name}")
+            # data needs no reset (only the valid bits do): a DSP's or a block RAM's own
+            # registers have none, so a reset would keep them out of it
+            reg = Signal(value.shape(), name=f"s{self.stages}_{name}", reset_less=True)
             with self.m.If(self.en):
                 self.m.d.sync += reg.eq(value)
             out[name] = reg

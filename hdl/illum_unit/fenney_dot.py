@@ -37,8 +37,10 @@ G_FRAC = 29                  # g = 2**29 / (127 * |b|)
 D_FRAC = 14                  # dq = d * 2**14
 DIV_SHIFT = 36               # M / 4080 as M * K >> 36
 DIV_K = round(2**DIV_SHIFT / 4080)
+assert DIV_K == 257 * 65537         # 0x1010101: the datapath multiplies by it with two adds
 MIN_LEN = 128                # shortest |b| (of 255) the table renormalises exactly
 G_PLAIN = round(2**G_FRAC / (127 * 255))
+assert G_PLAIN == 2**14 + 2**7 + 2**6 + 2
 
 
 @functools.lru_cache(maxsize=None)
@@ -49,7 +51,7 @@ def rsqrt_lut(addr_bits):
 
 
 class FenneyDot(Unit):
-    """(1-h) + h * (bump . light), one result per clock; latency 4, or 5 when renormalising."""
+    """(1-h) + h * (bump . light), one result per clock; latency 10, or 12 when renormalising."""
     NAME = "fenney_dot"
     DOC = "Fenney bump . light dot product, weighted by h (US 6,819,319 eq 1)"
     PARAMS = {"normalize": False, "rsqrt_bits": 12}
@@ -62,32 +64,53 @@ class FenneyDot(Unit):
 
     @property
     def latency(self):
-        return 5 if self.params["normalize"] else 4
+        return 12 if self.params["normalize"] else 10
 
     @property
     def lut(self):
         return rsqrt_lut(self.params["rsqrt_bits"]) if self.params["normalize"] else None
 
     def datapath(self, p, v):
+        """Every multiplier alone in its stage, registered on both sides; the table's output
+        registered before it is used."""
         v = dict(v)
         x, y, z = v.pop("x"), v.pop("y"), v.pop("z")
-        lx, ly, lz = v.pop("lx"), v.pop("ly"), v.pop("lz")
-        v["dot"] = x * lx + y * ly + z * lz                           # D
+        prods = {"_px": x * v.pop("lx"), "_py": y * v.pop("ly"), "_pz": z * v.pop("lz")}
         if self.params["normalize"]:
-            v = p.stage({**v, "n2": x * x + y * y + z * z})
+            prods.update(_qx=x * x, _qy=y * y, _qz=z * z)
+        v = p.stage(v, **prods)
+        # |D| <= 256*128 + 255*128 + 256*128 = 98,176 for any inputs: s18, one multiplier port
+        new = {"dot": (v.pop("_px") + v.pop("_py") + v.pop("_pz"))[:18].as_signed()}   # D
+        if self.params["normalize"]:
+            new["n2"] = v.pop("_qx") + v.pop("_qy") + v.pop("_qz")
+        v = p.stage(v, **new)
+        if self.params["normalize"]:
             n2 = v.pop("n2")
             big = n2 >= 65536
             n2_16 = Mux(big, n2 >> 2, n2)[:16]
-            addr = n2_16 >> (16 - self.params["rsqrt_bits"])
-            v = p.stage({**v, "g": rom(p, self.lut, addr, "rsqrt"), "big": big})
-            g, big = v.pop("g"), v.pop("big")
-            prod = v.pop("dot") * g
+            v = p.stage(v, big=big, _addr=n2_16 >> (16 - self.params["rsqrt_bits"]))
+            v = p.stage(v, g=rom(p, self.lut, v.pop("_addr"), "rsqrt"))
+            v = p.stage(v)                                                 # the table's output
+            v = p.stage(v, prod=v.pop("dot") * v.pop("g"))
+            big, prod = v.pop("big"), v.pop("prod")
             dq = Mux(big, (prod + (1 << 15)) >> 16, (prod + (1 << 14)) >> 15)
         else:
-            v = p.stage(v)
-            dq = (v.pop("dot") * G_PLAIN + (1 << 14)) >> 15
-        v = p.stage({**v, "dq": dq})                                   # d * 2**14
+            # D * G_PLAIN by wiring and adds (G_PLAIN = 2**14 + 2**7 + 2**6 + 2): a 19-bit
+            # operand would take two chained MULT18X18Ds
+            dot = v.pop("dot")
+            v = p.stage(v, _a=(dot << 14) + (dot << 7), _b=(dot << 6) + (dot << 1))
+            v = p.stage(v, prod=v.pop("_a") + v.pop("_b"))
+            dq = (v.pop("prod") + (1 << 14)) >> 15
+        # |d| <= |l| / 127 <= sqrt(3) (two of the table's bins' error over that): |dq| < 2**16
+        v = p.stage(v, dq=dq[:17].as_signed())                             # d * 2**14
         h = v.pop("h")
-        v = p.stage(v, m=((255 - h) << D_FRAC) + h * v.pop("dq"))
-        q = (v.pop("m") * DIV_K + (1 << (DIV_SHIFT - 1))) >> DIV_SHIFT
+        v = p.stage(v, _keep=(255 - h) << D_FRAC, _hd=h * v.pop("dq"))
+        v = p.stage(v, m=v.pop("_keep") + v.pop("_hd"))                  # M
+        # round(M / 4080) as (M * K + 2**35) >> 36 with K = 0x1010101 = 257 * 65537, by wiring
+        # and adds: s = 257 M, then (s + (s >> 16) + 2**19) >> 20 (s's low 16 bits never carry)
+        m = v.pop("m")
+        v = p.stage(v, _s=m + (m << 8))
+        s = v.pop("_s")
+        v = p.stage(v, _q=(s + (s >> 16) + (1 << (DIV_SHIFT - 17))) >> (DIV_SHIFT - 16))
+        q = v.pop("_q")
         return p.stage({**v, "x": Mux(q < 0, 0, Mux(q > 1023, 1023, q))[:10]})

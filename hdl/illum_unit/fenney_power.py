@@ -19,34 +19,31 @@ ONE = 1023  # full scale of a 10-bit fraction, as the patent uses it
 
 
 class FenneyPower(Unit):
-    """P(X, C): 3 multipliers and 5 add/subtracts, one result per clock, latency 4."""
+    """P(X, C): 3 multipliers and 5 add/subtracts, one result per clock, latency 7."""
     NAME = "fenney_power"
     DOC = "Fenney quadratic power approximation (US 6,819,319)"
     inputs = (Field("x", u(10, 10)), Field("c", u(8, 8)))
     outputs = (Field("p", u(10, 10)),)
-    latency = 4
+    latency = 7
 
     def datapath(self, p, v):
         return power_lanes(p, v, [("x", "c", "p")])
 
 
 def power_lanes(p, v, lanes):
-    """P(X, C) for several ``(x_key, c_key, p_key)`` side by side on one pipeline (4 stages);
-    the ``x`` and ``c`` values are consumed."""
+    """P(X, C) for several ``(x_key, c_key, p_key)`` side by side on one pipeline (7 stages);
+    the ``x`` and ``c`` values are consumed. Each multiplier has registers at its inputs and
+    its output and nothing else in its stage (the MULT18X18D's own timing)."""
     v = dict(v)
-    first = {}
-    for k, (x, c, _) in enumerate(lanes):
-        first[f"_t{k}"] = (v[c] + 8) * (ONE - v.pop(x))                # k * (1023 - X)
-        first[f"_c{k}"] = v.pop(c)
-    v = p.stage(v, **first)
-    new = {}
-    for k in range(len(lanes)):
-        t = v.pop(f"_t{k}")
-        new[f"_l{k}"] = Mux((t >> 3) > ONE, 0, ONE - (t >> 3))[:10]          # L
-    v = p.stage(v, **new)
-    v = p.stage(v, **{f"_q{k}": (v[f"_l{k}"] * v[f"_l{k}"]) >> 10 for k in range(len(lanes))})
-    out = {}
-    for k, (_, _, key) in enumerate(lanes):
-        l, q, c = v.pop(f"_l{k}"), v.pop(f"_q{k}"), v.pop(f"_c{k}")
-        out[key] = (l + ((c * (q - l)) >> 8))[:10]                                     # P
-    return p.stage(v, **out)
+    n = range(len(lanes))
+    v = p.stage(v, **{f"_k{k}": v[c] + 8 for k, (_, c, _) in enumerate(lanes)},    # k
+                **{f"_u{k}": ONE - v.pop(x) for k, (x, _, _) in enumerate(lanes)},
+                **{f"_c{k}": v.pop(c) for k, (_, c, _) in enumerate(lanes)})
+    v = p.stage(v, **{f"_t{k}": v.pop(f"_k{k}") * v.pop(f"_u{k}") for k in n})   # k (1023 - X)
+    v = p.stage(v, **{f"_l{k}": Mux((v[f"_t{k}"] >> 3) > ONE, 0,                   # L
+                                    ONE - (v.pop(f"_t{k}") >> 3))[:10] for k in n})
+    v = p.stage(v, **{f"_q{k}": (v[f"_l{k}"] * v[f"_l{k}"]) >> 10 for k in n})       # Q
+    v = p.stage(v, **{f"_d{k}": v.pop(f"_q{k}") - v[f"_l{k}"] for k in n})           # Q - L
+    v = p.stage(v, **{f"_m{k}": v.pop(f"_c{k}") * v.pop(f"_d{k}") for k in n})       # C (Q - L)
+    return p.stage(v, **{key: (v.pop(f"_l{k}") + (v.pop(f"_m{k}") >> 8))[:10]         # P
+                         for k, (_, _, key) in enumerate(lanes)})

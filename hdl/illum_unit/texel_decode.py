@@ -25,24 +25,23 @@ L1 = 255  # |x| + |y| + |z| of every valid decoded texel
 
 
 class TexelDecode(Unit):
-    """16-bit X/Z texel to bump vector (x, y, z), one per clock, latency 1."""
+    """16-bit X/Z texel to bump vector (x, y, z), one per clock, latency 2."""
     NAME = "texel_decode"
     DOC = "Fenney X/Z texel decode (US 6,819,319, second embodiment)"
     inputs = (Field("texel_x", u(8, unit="code")), Field("texel_z", u(8, unit="code")))
     outputs = (Field("x", s(9, unit="1/255")), Field("y", u(8, unit="1/255")),
                Field("z", s(9, unit="1/255")), Field("invalid", u(1, unit="flag")))
-    latency = 1
+    latency = 2
 
     def datapath(self, p, v):
         v = dict(v)
         tx, tz = v.pop("texel_x"), v.pop("texel_z")
-        bump_x = (Mux(tx == 255, 254, tx) - 127) * 2
-        bump_z = (Mux(tz == 255, 254, tz) - 127) * 2
-        l1_xz = abs(bump_x) + abs(bump_z)
-        return p.stage({
-            **v,
-            "x": bump_x[:9].as_signed(),
-            "z": bump_z[:9].as_signed(),
-            "y": Mux(l1_xz > L1, 0, L1 - l1_xz)[:8],
-            "invalid": (tx == 255) | (tz == 255) | (l1_xz > L1),
-        })
+        new = {"bad": (tx == 255) | (tz == 255)}
+        for k, code in (("x", tx), ("z", tz)):
+            c = Mux(code == 255, 254, code)
+            new[k] = ((c - 127) * 2)[:9].as_signed()
+            new[f"_a{k}"] = Mux(c >= 127, c - 127, 127 - c)[:7] << 1           # |Bump|
+        v = p.stage(v, **new)
+        l1_xz = v.pop("_ax") + v.pop("_az")
+        return p.stage(v, y=Mux(l1_xz > L1, 0, L1 - l1_xz)[:8],
+                       invalid=v.pop("bad") | (l1_xz > L1))
