@@ -12,8 +12,29 @@ from amaranth.hdl import Cat, Const, Mux, signed, unsigned
 from .fixed import u
 from .lut import build_lut, rom
 
-__all__ = ["leading_one", "normalise", "recip_stages", "recip", "rsqrt_stages", "rsqrt",
+__all__ = ["products", "leading_one", "normalise", "recip_stages", "recip", "rsqrt_stages", "rsqrt",
            "divide_stages", "floor_divide"]
+
+
+def products(p, v, jobs, port=18):
+    """``v[out] = v[a] * v[b]`` for jobs ``{out: (a, b)}`` (operands consumed), in two stages:
+    ``b`` cut into ``port``-bit slices, each slice's product alone in the first stage (one
+    DSP each, registered on both sides), the shifted partial products summed in the second."""
+    v = dict(v)
+    parts, sums = {}, {}
+    for out, (a, b) in jobs.items():
+        x, y = v.pop(a), v.pop(b)
+        terms = []
+        for k, lo in enumerate(range(0, len(y), port)):
+            piece = y[lo:lo + port]
+            if lo + port >= len(y) and y.shape().signed:
+                piece = piece.as_signed()
+            parts[f"_{out}_{k}"] = x * piece
+            terms.append((f"_{out}_{k}", lo))
+        sums[out] = terms
+    v = p.stage(v, **parts)
+    return p.stage(v, **{out: sum((v.pop(key) << lo for key, lo in terms), Const(0, 1))
+                         for out, terms in sums.items()})
 
 
 def leading_one(value, width):

@@ -9,12 +9,12 @@ import functools
 import operator
 
 import numpy as np
-from amaranth.hdl import Mux, Value
+from amaranth.hdl import Mux, Signal, Value
 from amaranth.lib.memory import Memory
 
 from .fixed import Fixed
 
-__all__ = ["Lut", "build_lut", "rom"]
+__all__ = ["Lut", "build_lut", "rom", "read_roms"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,18 +117,51 @@ def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, edges=None, oversa
                None if domain is None and edges is None else (lo, hi), err, edges)
 
 
-def rom(p, lut, addr, name):
-    """Instantiate ``lut`` as a ROM in pipeline ``p``'s module, with an asynchronous read
-    port; returns the read data. ``name`` is made unique within the module.
+class RomRead:
+    """A table read, to be placed in a :meth:`hdl.unit.Pipeline.stage`: the stage's register
+    is the block RAM's own read register (see :func:`read_roms`)."""
 
-    The caller registers the result in the next pipeline stage, so Yosys can merge the register
-    into a block RAM.
-    """
-    mem = Memory(shape=lut.fmt.shape, depth=lut.depth, init=[int(v) for v in lut.contents])
-    p.m.submodules[p.unique(name)] = mem
-    port = mem.read_port(domain="comb")
-    p.m.d.comb += port.addr.eq(addr)
-    return Value.cast(port.data)
+    def __init__(self, lut, addr, name):
+        self.lut, self.addr, self.name = lut, Value.cast(addr), name
+
+
+def rom(p, lut, addr, name):
+    """A read of ``lut`` at ``addr``, for ``p.stage(v, out=rom(...))``: the value is the
+    table's registered output at the next stage. Use it through a plain register stage
+    (``v = p.stage(v)``) before any logic, so that the RAM's clock-to-output is not in series
+    with it. ``name`` is made unique within the module."""
+    return RomRead(lut, addr, name)
+
+
+def read_roms(p, reads):
+    """Build ``{key: RomRead}`` in pipeline ``p``: synchronous read ports enabled with the
+    stage, two reads of one table sharing a memory (a block RAM has two ports). A table of
+    ``2**k + 1`` entries (both ends of a quarter wave) keeps ``2**k`` in memory and its last
+    entry in a register, so it fits a power-of-two RAM. Returns ``{key: value}``."""
+    groups = {}
+    for key, r in reads.items():
+        groups.setdefault(id(r.lut), []).append((key, r))
+    out = {}
+    for group in groups.values():
+        for at in range(0, len(group), 2):
+            pair = group[at:at + 2]
+            lut = pair[0][1].lut
+            depth = lut.depth
+            last = depth - 1 if depth > 2 and (depth - 1) & (depth - 2) == 0 else None
+            stored = lut.contents[:last] if last else lut.contents
+            mem = Memory(shape=lut.fmt.shape, depth=len(stored), init=[int(v) for v in stored])
+            p.m.submodules[p.unique("_".join(r.name for _, r in pair))] = mem
+            for key, r in pair:
+                port = mem.read_port(domain="sync")
+                p.m.d.comb += [port.addr.eq(r.addr), port.en.eq(p.en)]
+                data = Value.cast(port.data)
+                if last:
+                    top = Signal(name=f"{r.name}_last", reset_less=True)
+                    with p.m.If(p.en):
+                        p.m.d.sync += top.eq(r.addr == last)
+                    data = Mux(top, int(lut.contents[last]), data)
+                out[key] = data
+    return out
 
 
 def float_bins(exp_lo, exp_hi, mant_bits):

@@ -9,8 +9,10 @@ from amaranth.hdl import Mux
 from .lut import rom
 
 
-def cos_lookup(p, lut, angle, bits, name):
-    """``(magnitude, negative)`` of cos(angle): an asynchronous ROM read and its sign bit."""
+def cos_address(lut, angle, bits):
+    """``(address, negative)`` of cos(angle) in ``lut``: the fold and the sign bit, logic only
+    (register them before the read, so that the adds and the fold are not on the table's
+    address path)."""
     steps = lut.depth - 1
     quarter = 1 << (bits - 2)
     if steps < quarter or steps % quarter:
@@ -19,7 +21,13 @@ def cos_lookup(p, lut, angle, bits, name):
     half_angle = a[:bits - 1]                                  # a mod 180 deg
     fold = Mux(half_angle > quarter, (1 << (bits - 1)) - half_angle, half_angle)[:bits - 1]
     negative = (a > quarter) & (a < 3 * quarter)
-    return rom(p, lut, fold * (steps // quarter), name), negative
+    return fold * (steps // quarter), negative
+
+
+def cos_lookup(p, lut, angle, bits, name):
+    """``(magnitude, negative)`` of cos(angle): an asynchronous ROM read and its sign bit."""
+    addr, negative = cos_address(lut, angle, bits)
+    return rom(p, lut, addr, name), negative
 
 
 def signed_cos(magnitude, negative):

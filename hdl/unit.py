@@ -24,6 +24,7 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from .fixed import layout
+from .lut import RomRead, read_roms
 
 __all__ = ["Pipeline", "Unit", "check_int", "check_bool", "check_float", "check_param",
            "param_range"]
@@ -101,8 +102,11 @@ class Pipeline:
         next stage). ``v`` is read after ``new`` is evaluated, so values a stage consumes can be
         popped from ``v`` in ``new``'s expressions and are not carried further."""
         self.stages += 1
-        out = {}
-        for name, value in {**v, **new}.items():
+        values = {**v, **new}
+        out = read_roms(self, {k: r for k, r in values.items() if isinstance(r, RomRead)})
+        for name, value in values.items():
+            if name in out:
+                continue
             value = Value.cast(value)
             # data needs no reset (only the valid bits do): a DSP's or a block RAM's own
             # registers have none, so a reset would keep them out of it

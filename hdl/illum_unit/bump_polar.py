@@ -3,7 +3,7 @@ then the law-of-cosines illumination against the bump normal B from the bump map
 
 In ``phi_n theta_n phi_l theta_l phi_h theta_h phi_b theta_b``; out as ``illum``. The two
 rotations run one after the other on one pipeline (the H angles ride along through the first),
-so the latency is 2 x 7 + 5 and the throughput one vector pair per clock.
+so the latency is 2 x 21 + 11 and the throughput one vector pair per clock.
 """
 from ..rotation_unit import Rotation
 from ..unit import Unit

@@ -49,9 +49,10 @@ class FenneyPolar(Unit):
 
     @property
     def latency(self):
-        return 4 + self.power.latency
+        return 6 + self.power.latency
 
     def datapath(self, p, v):
+        """The tables' outputs registered, then each multiplier alone in its stage."""
         t = self.params["trig_bits"]
         v = dict(v)
         s, r, q = v.pop("s"), v.pop("r"), v.pop("q")
@@ -61,13 +62,15 @@ class FenneyPolar(Unit):
                      "sin_s": rom(p, lut, 256 - s, "sin_s"),     # sin S = cos(90 - S)
                      "cos_s": rom(p, lut, s, "cos_s"),
                      "cos_d": cos_d, "neg": neg})                  # sign bit 26
+        v = p.stage(v)                                               # the tables' outputs
         k2, k3 = v.pop("k2"), v.pop("k3")
-        v = p.stage(v, m12=k2 * v.pop("sin_s"), m14=k3 * v.pop("cos_s"))
+        # k3 cos S <= 255 * 2**t: t + 8 bits (one MULT18X18D port at the default t = 10)
+        v = p.stage(v, m12=k2 * v.pop("sin_s"), m14=(k3 * v.pop("cos_s"))[:t + 8])
         v = p.stage(v, m20=v.pop("m14") * v.pop("cos_d"),
                     a22=(v.pop("k1") << (2 * t)) + (v.pop("m12") << t))
         m20, a22 = v.pop("m20"), v.pop("a22")
-        total = Mux(v.pop("neg"), a22 - m20, a22 + m20)             # add/subtract unit 24
-        s11 = ((total + (1 << (2 * t - 1))) >> (2 * t))[:11].as_signed()
+        v = p.stage(v, total=Mux(v.pop("neg"), a22 - m20, a22 + m20))  # add/subtract unit 24
+        s11 = ((v.pop("total") + (1 << (2 * t - 1))) >> (2 * t))[:11].as_signed()
         i8 = Mux(s11 < 0, 0, Mux(s11 > 255, 255, s11))[:8]          # clamp 28
         v = p.stage({**v, "intensity": i8, "x": (i8 << 2) | (i8 >> 6)})
         v = self.power.datapath(p, v)                                # power unit 30

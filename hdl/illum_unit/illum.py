@@ -18,7 +18,7 @@ from amaranth.hdl import Mux
 
 from ..fixed import Field, binary_angle, u
 from ..lut import build_lut, quarter_cos_lut, rom
-from ..trig import cos_lookup, signed_cos
+from ..trig import cos_address, signed_cos
 from ..unit import Unit
 
 OUT_FRAC = 15                          # dot, diffuse and specular: 1.0 = 2**15
@@ -31,11 +31,11 @@ def shade_lut(table_bits, exponent):
 
 
 class Illum(Unit):
-    """Two inner products by the law of cosines, then diffuse and specular tables; latency 5."""
+    """Two inner products by the law of cosines, then diffuse and specular tables; latency 11."""
     NAME = "illum"
     DOC = "Law-of-cosines illumination with diffuse and specular tables (seed 003 eq 22-25)"
     PARAMS = {"angle_bits": 10, "trig_bits": 14, "table_bits": 10, "shininess": 16}
-    latency = 5
+    latency = 11
 
     RANGES = {"angle_bits": (4, 16), "trig_bits": (8, 16), "table_bits": (4, 14),
               "shininess": (1, 1024)}
@@ -66,13 +66,17 @@ class Illum(Unit):
         bits, t = self.params["angle_bits"], self.params["trig_bits"]
         v = dict(v)
         p_n, t_n = v.pop("phi_n"), v.pop("theta_n")
-        reads = {}
+        addrs = {}
         for a in ("l", "h"):
             p_a, t_a = v.pop(f"phi_{a}"), v.pop(f"theta_{a}")
             for key, angle in (("cm", t_a - t_n), ("cp", t_a + t_n), ("cf", p_a - p_n)):
-                mag, neg = cos_lookup(p, self.cos_lut, angle, bits, f"{key}_{a}")
-                reads[f"{key}_{a}"], reads[f"{key}_{a}_neg"] = mag, neg
-        v = p.stage({**v, **reads})                                   # six cosine look-ups
+                addrs[f"{key}_{a}"], addrs[f"{key}_{a}_neg"] = cos_address(self.cos_lut,
+                                                                           angle, bits)
+        v = p.stage(v, **addrs)                                       # the tables' addresses
+        for key in [k for k in addrs if not k.endswith("_neg")]:
+            v[key] = rom(p, self.cos_lut, v[key], key)
+        v = p.stage(v)                                                # six cosine look-ups
+        v = p.stage(v)                                                # the tables' outputs
         for a in ("l", "h"):
             cm, cp, cf = (signed_cos(v.pop(f"{k}_{a}"), v.pop(f"{k}_{a}_neg"))
                           for k in ("cm", "cp", "cf"))
@@ -83,8 +87,13 @@ class Illum(Unit):
         v = p.stage(v)
         shift = 2 * t + 1 - OUT_FRAC                                  # 2 N.A at 2t bits
         for a in ("l", "h"):
-            twice = (v.pop(f"sum_{a}") << t) + v.pop(f"prod_{a}")
-            dot = (twice + (1 << (shift - 1))) >> shift
+            v[f"twice_{a}"] = (v.pop(f"sum_{a}") << t) + v.pop(f"prod_{a}")
+        v = p.stage(v)
+        for a in ("l", "h"):
+            v[f"twice_{a}"] = v[f"twice_{a}"] + (1 << (shift - 1))
+        v = p.stage(v)                                                # rounded
+        for a in ("l", "h"):
+            dot = v.pop(f"twice_{a}") >> shift
             v[f"dot_{a}"] = Mux(dot < 0, 0, Mux(dot > 1 << OUT_FRAC, 1 << OUT_FRAC, dot))[:16]
         v = p.stage(v)                                                # clamped at 0
         top = (1 << self.params["table_bits"]) - 1
@@ -92,5 +101,7 @@ class Illum(Unit):
         addr = {a: Mux(v[f"dot_{a}"] >> (OUT_FRAC - self.params["table_bits"]) > top, top,
                        v[f"dot_{a}"] >> (OUT_FRAC - self.params["table_bits"]))
                 for a in ("l", "h")}
-        return p.stage({**v, "diffuse": rom(p, diffuse, addr["l"], "diffuse"),
-                        "specular": rom(p, specular, addr["h"], "specular")})
+        v = p.stage(v, **{f"_a{a}": addr[a] for a in ("l", "h")})
+        v = p.stage(v, diffuse=rom(p, diffuse, v.pop("_al"), "diffuse"),
+                    specular=rom(p, specular, v.pop("_ah"), "specular"))
+        return p.stage(v)                                             # the tables' outputs

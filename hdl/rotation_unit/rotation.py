@@ -9,7 +9,8 @@ D = phi_A - phi_N, X = theta_A + D, Y = theta_A - D::
     yk      = (cos Y - cos X) / (2 cos Z)          (eq 27)
     theta'  = Z + (90 - Z) (1 - acos(yk) / 90)     (eq 19, 21; the bracket is table Tprop)
 
-Datapath (7 stages, one vector per clock): four sin/cos look-ups (one quarter-wave table
+Datapath (21 stages, one vector per clock; every table read at a registered address and its
+output registered twice, every multiplier alone in its stage): four sin/cos look-ups (one quarter-wave table
 generator, folded); an adder and a subtractor; an asin table; Z and its folds; two reciprocal
 tables, 1/(2 sin) and 1/(2 cos), in one generator ("the reciprocal folded into them"); the two
 ratio multipliers; an atan table with a floating-point address (the ratio is unbounded) and
@@ -29,8 +30,9 @@ import numpy as np
 from amaranth.hdl import Mux
 
 from ..fixed import Field, Fixed, binary_angle, u
+from ..arith import products
 from ..lut import build_lut, float_address, float_bins, quarter_cos_lut, rom
-from ..trig import cos_lookup, signed_cos
+from ..trig import cos_address, signed_cos
 from ..unit import Unit
 
 RECIP_FRAC = 16          # 1/(2 sin a) and 1/(2 cos a): 16 fraction bits
@@ -98,7 +100,7 @@ class Rotation(Unit):
 
     @property
     def latency(self):
-        return 7 if self.params["method"] == "paper" else 8
+        return 21
 
     @property
     def tables(self):
@@ -107,59 +109,71 @@ class Rotation(Unit):
                 "asin": asin_lut(p["asin_bits"], n), "recip": recip_sin_lut(n),
                 "atan": atan_lut(p["atan_bits"], n), "prop": prop_lut(p["prop_bits"])}
 
-    def asin_read(self, p, magnitude, frac, name):
-        """asin of an unsigned fixed-point value (``frac`` fraction bits, 1.0 = 2**frac),
-        saturated at the table's last bin."""
+    def asin_address(self, magnitude, frac):
+        """The asin table's address for an unsigned fixed-point value (``frac`` fraction bits,
+        1.0 = 2**frac), saturated at the table's last bin."""
         top = (1 << self.params["asin_bits"]) - 1
         addr = magnitude >> (frac - self.params["asin_bits"])
-        return rom(p, self.tables["asin"], Mux(addr > top, top, addr), name)
+        return Mux(addr > top, top, addr)
 
-    def lookups(self, p, angles):
-        """Registered (magnitude, sign) cosine look-ups of ``{name: binary angle}``."""
-        reads = {}
+    def read(self, p, v, **reads):
+        """Table reads ``key=(table, address key)`` (the addresses ``v[...]`` consumed),
+        registered twice: the RAM's own read register, then a register before any logic."""
+        v = p.stage(v, **{k: rom(p, self.tables[tab], v.pop(a), k)
+                          for k, (tab, a) in reads.items()})
+        return p.stage(v)
+
+    def lookups(self, p, v, angles):
+        """Cosine look-ups of ``{name: binary angle}``: the folded addresses and sign bits
+        registered, then the reads (three stages); ``v[name]`` signed, 1.0 = 2**trig_bits."""
+        bits = self.params["angle_bits"]
+        new = {}
         for key, a in angles.items():
-            reads[key], reads[key + "_neg"] = cos_lookup(p, self.tables["trig"], a,
-                                                         self.params["angle_bits"], key)
-        return reads
+            new[f"_a{key}"], new[f"{key}_neg"] = cos_address(self.tables["trig"], a, bits)
+        v = p.stage(v, **new)
+        v = self.read(p, v, **{key: ("trig", f"_a{key}") for key in angles})
+        return {**v, **{key: signed_cos(v.pop(key), v.pop(f"{key}_neg")) for key in angles}}
 
     def datapath(self, p, v):
+        """Every table read at registered addresses and registered twice, every multiplier
+        alone in its stage; 21 stages."""
         if self.params["method"] == "exact":
             return self.datapath_exact(p, v)
         n, t = self.params["angle_bits"], self.params["trig_bits"]
         quarter, half = 1 << (n - 2), 1 << (n - 1)
-        tab = self.tables
         v = dict(v)
         p_n, t_a, p_a = v.pop("phi_n"), v.pop("theta_a"), v.pop("phi_a")
-        d = p_a - p_n
-        v = p.stage({**v, **self.lookups(p, {                             # 4 look-ups
-            "sx": t_a + d - quarter, "sy": t_a - d - quarter,              # sin = cos(a - 90)
-            "cx": t_a + d, "cy": t_a - d})})
-        sx, sy, cx, cy = (signed_cos(v.pop(k), v.pop(k + "_neg")) for k in ("sx", "sy", "cx", "cy"))
-        v = p.stage({**v, "s2": sx + sy, "n2": cy - cx})                  # 2 sin(thx), 2 num
+        v = p.stage(v, _tp=t_a + (p_a - p_n), _tm=t_a - (p_a - p_n))          # X, Y
+        tp, tm = v.pop("_tp"), v.pop("_tm")
+        v = self.lookups(p, v, {"sx": tp - quarter, "sy": tm - quarter,          # 4 look-ups
+                                "cx": tp, "cy": tm})                             # sin = cos(a - 90)
+        v = p.stage(v, s2=v.pop("sx") + v.pop("sy"), n2=v.pop("cy") - v.pop("cx"))  # 2 sin thx
         s2, n2 = v.pop("s2"), v.pop("n2")
-        v = p.stage({**v, "thx": self.asin_read(p, abs(s2), t + 1, "asin"),
-                     "s_neg": s2 < 0, "n_neg": n2 < 0, "n_abs": abs(n2)})
+        v = p.stage(v, _as2=abs(s2), s_neg=s2 < 0, n_neg=n2 < 0, n_abs=abs(n2))
+        v = p.stage(v, _aa=self.asin_address(v.pop("_as2"), t + 1))
+        v = self.read(p, v, thx=("asin", "_aa"))
         thx = Mux(v.pop("s_neg"), -v["thx"], v.pop("thx"))
-        z = (thx - v.pop("theta_n"))[:n].as_signed()                     # Z in (-180, 180]
-        az = abs(z)
-        fold_s = Mux(az > quarter, half - az, az)                         # |sin Z| = sin fold_s
-        fold_c = Mux(az > quarter, az - quarter, quarter - az)            # |cos Z| = sin fold_c
-        v = p.stage({**v, "az": az, "z_neg": z < 0,
-                     "rs": rom(p, tab["recip"], fold_s, "recip_sin"),
-                     "rc": rom(p, tab["recip"], fold_c, "recip_cos")})
+        v = p.stage(v, z=(thx - v.pop("theta_n"))[:n].as_signed())              # Z in (-180, 180]
+        z = v.pop("z")
+        v = p.stage(v, az=abs(z), z_neg=z < 0)
+        az = v["az"]
+        v = p.stage(v, _fs=Mux(az > quarter, half - az, az),                     # |sin Z| = sin fs
+                    _fc=Mux(az > quarter, az - quarter, quarter - az),           # |cos Z| = sin fc
+                    _rest=quarter - az)
+        v = self.read(p, v, rs=("recip", "_fs"), rc=("recip", "_fc"))
         frac = t + RECIP_FRAC
-        n_abs = v.pop("n_abs")
-        v = p.stage(v, ratio=n_abs * v.pop("rs"), yk=n_abs * v.pop("rc"))
+        n_abs = v["n_abs"]
+        v = products(p, {**v, "_nb": n_abs}, {"ratio": ("n_abs", "rs"), "yk": ("_nb", "rc")})
         ratio, yk = v.pop("ratio"), v.pop("yk")
         ptop = (1 << self.params["prop_bits"]) - 1
         paddr = yk >> (frac - self.params["prop_bits"])
-        v = p.stage({**v,
-                     "pm": rom(p, tab["atan"], float_address(
-                         ratio, frac, ATAN_EXP_LO, n - 2, self.params["atan_bits"]), "atan"),
-                     "prop": rom(p, tab["prop"], Mux(paddr > ptop, ptop, paddr), "prop")})
-        az, pm = v.pop("az"), v.pop("pm")
-        theta = az + (((quarter - az) * v.pop("prop") + (1 << (PROP_FRAC - 1))) >> PROP_FRAC)
-        return p.stage(v, **self.quadrant(v.pop("z_neg"), v.pop("n_neg"), pm), theta=theta[:n])
+        v = p.stage(v, _am=float_address(ratio, frac, ATAN_EXP_LO, n - 2, self.params["atan_bits"]),
+                    _ap=Mux(paddr > ptop, ptop, paddr))
+        v = self.read(p, v, pm=("atan", "_am"), prop=("prop", "_ap"))
+        v = p.stage(v, _pr=v.pop("_rest") * v.pop("prop"))
+        theta = v.pop("az") + ((v.pop("_pr") + (1 << (PROP_FRAC - 1))) >> PROP_FRAC)
+        return p.stage(v, **self.quadrant(v.pop("z_neg"), v.pop("n_neg"), v.pop("pm")),
+                       theta=theta[:n])
 
     def quadrant(self, x_neg, y_neg, magnitude):
         """phi' from its first-quadrant magnitude and the signs of x' and y' (atan2)."""
@@ -175,32 +189,35 @@ class Rotation(Unit):
             theta' = acos(cos theta') = 90 - asin(cos theta'),  |phi'| = asin(|y'| / sin theta')
 
         with 1/(2 sin theta') from the reciprocal table (theta' is an exact binary angle by
-        then) and phi' by quadrant from the signs of x' and y'. Three multipliers; latency 8.
+        then) and phi' by quadrant from the signs of x' and y'. Three multipliers; latency 21.
         """
         n, t = self.params["angle_bits"], self.params["trig_bits"]
         quarter, half = 1 << (n - 2), 1 << (n - 1)
         v = dict(v)
-        p_n, t_n, t_a, p_a = v.pop("phi_n"), v.pop("theta_n"), v.pop("theta_a"), v.pop("phi_a")
-        d = p_a - p_n
-        v = p.stage({**v, **self.lookups(p, {                             # 10 look-ups
-            "sx": t_a + d - quarter, "sy": t_a - d - quarter, "cx": t_a + d, "cy": t_a - d,
+        p_n, t_a, p_a = v.pop("phi_n"), v["theta_a"], v.pop("phi_a")
+        v = p.stage(v, d=p_a - p_n, _tp=t_a + (p_a - p_n), _tm=t_a - (p_a - p_n))
+        t_n, t_a, d, tp, tm = (v.pop(k) for k in ("theta_n", "theta_a", "d", "_tp", "_tm"))
+        v = self.lookups(p, v, {                                            # 10 look-ups
+            "sx": tp - quarter, "sy": tm - quarter, "cx": tp, "cy": tm,
             "cm": t_a - t_n, "cp": t_a + t_n, "cd": d, "cn": t_n,
-            "sp": t_n + t_a - quarter, "sm": t_n - t_a - quarter})})
-        c = {k: signed_cos(v.pop(k), v.pop(k + "_neg"))
-             for k in ("sx", "sy", "cx", "cy", "cm", "cp", "cd", "cn", "sp", "sm")}
+            "sp": t_n + t_a - quarter, "sm": t_n - t_a - quarter})
+        c = {k: v.pop(k) for k in ("sx", "sy", "cx", "cy", "cm", "cp", "cd", "cn", "sp", "sm")}
         v = p.stage({**v, "s2": c["sx"] + c["sy"], "n2": c["cy"] - c["cx"],   # 2 sin tA cos D, 2 y'
                      "csum": c["cm"] + c["cp"], "cdiff": c["cm"] - c["cp"],
                      "ssum": c["sp"] + c["sm"], "cd": c["cd"], "cn": c["cn"]})  # 2 cos tA sin tN
         v = p.stage(v, pc=v.pop("cdiff") * v.pop("cd"), px=v.pop("s2") * v.pop("cn"))
-        c2 = (v.pop("csum") << t) + v.pop("pc")                            # 2 cos theta', 2t bits
-        x2 = v.pop("px") - (v.pop("ssum") << t)                            # 2 x', 2t bits
-        n2 = v.pop("n2")
-        v = p.stage({**v, "am": self.asin_read(p, abs(c2), 2 * t + 1, "acos"),
-                     "c_neg": c2 < 0, "x_neg": x2 < 0, "y_neg": n2 < 0, "n_abs": abs(n2)})
+        v = p.stage(v, c2=(v.pop("csum") << t) + v.pop("pc"),              # 2 cos theta', 2t bits
+                    x2=v.pop("px") - (v.pop("ssum") << t))                 # 2 x', 2t bits
+        c2, x2, n2 = v.pop("c2"), v.pop("x2"), v.pop("n2")
+        v = p.stage(v, _ac=abs(c2), c_neg=c2 < 0, x_neg=x2 < 0, y_neg=n2 < 0, n_abs=abs(n2))
+        v = p.stage(v, _aa=self.asin_address(v.pop("_ac"), 2 * t + 1))
+        v = self.read(p, v, am=("asin", "_aa"))
         am = v.pop("am")
-        theta = Mux(v.pop("c_neg"), quarter + am, quarter - am)            # acos
-        fold = Mux(theta > quarter, half - theta, theta)                   # sin theta' = sin fold
-        v = p.stage({**v, "theta": theta[:n], "r": rom(p, self.tables["recip"], fold, "recip")})
-        v = p.stage(v, ratio=v.pop("n_abs") * v.pop("r"))                  # |y'| / sin theta'
-        v = p.stage(v, pm=self.asin_read(p, v.pop("ratio"), t + RECIP_FRAC, "asin_phi"))
+        v = p.stage(v, theta=Mux(v.pop("c_neg"), quarter + am, quarter - am)[:n])  # acos
+        theta = v["theta"]
+        v = p.stage(v, _af=Mux(theta > quarter, half - theta, theta))      # sin theta' = sin fold
+        v = self.read(p, v, r=("recip", "_af"))
+        v = products(p, v, {"ratio": ("n_abs", "r")})                      # |y'| / sin theta'
+        v = p.stage(v, _ar=self.asin_address(v.pop("ratio"), t + RECIP_FRAC))
+        v = self.read(p, v, pm=("asin", "_ar"))
         return p.stage(v, **self.quadrant(v.pop("x_neg"), v.pop("y_neg"), v.pop("pm")))
