@@ -73,12 +73,15 @@ def count(name, params=None, work=None):
         elif t in ("$mux", "$pmux"):
             out["mux"] += 1
         elif t == "$mem_v2":
-            tables.append((_int(p["SIZE"]), _int(p["WIDTH"])))
+            tables.append((_int(p["SIZE"]), _int(p["WIDTH"]), _int(p["RD_PORTS"])))
         elif t in FLOPS:
             out["flop_bits"] += _int(p["WIDTH"])
     return {"mul": out["mul"], "mul_widths": sorted(muls), "const_mul": out["const_mul"],
             "add": out["add"], "compare": out["compare"], "mux": out["mux"],
-            "tables": len(tables), "table_bits": sum(s * w for s, w in tables),
+            # a look-up is a read port: two look-ups of one table share a memory (a RAM's two
+            # ports), as the seeds' "LUT" counts look-ups
+            "tables": sum(r for _, _, r in tables), "memories": len(tables),
+            "table_bits": sum(s * w for s, w, _ in tables),
             "flop_bits": out["flop_bits"]}
 
 
@@ -100,7 +103,7 @@ def main(argv=None):
               f"{c['mux']:4d} {c['tables']:6d} {c['table_bits']:10d} {c['flop_bits']:7d}  "
               f"{' '.join(c['mul_widths'])}" + (f"; {SEED_COUNTS[name]}" if name in SEED_COUNTS
                                                  else ""))
-    print("(tables and their bits are Yosys memories; 'const' counts multiplications by a "
+    print("(tables: look-ups, i.e. memory read ports; table bits: the memories' bits; 'const' counts multiplications by a "
           "constant apart)")
 
 

@@ -61,9 +61,10 @@ def test_flow_places_a_small_unit_on_ecp5_and_ice40(tmp_path):
     ecp5, ice40 = rows
     # the wrapper: a flop per input bit and per output bit, and the two handshake pins
     assert ecp5["wrapper_cells"]["TRELLIS_FF"] == 16 + 29 + 2
-    # and the core's: its output register, less the two bits that are always 0 (x, z even)
-    assert ecp5["core_cells"]["TRELLIS_FF"] == 9 + 8 + 9 + 1 + 1 - 2
-    assert ecp5["util"]["FF"] == 47 + 26
+    # and the core's two stages, less the bits that are always 0 (x, z and |x|, |z| even):
+    # x z bad |x| |z| valid, then x z y invalid valid
+    assert ecp5["core_cells"]["TRELLIS_FF"] == (8 + 8 + 1 + 7 + 7 + 1) + (8 + 8 + 8 + 1 + 1)
+    assert ecp5["util"]["FF"] == 47 + 58
     assert ecp5["util"]["LUT4"] > 0 and ecp5["util"]["MULT18X18D"] == 0
     assert ice40["util"]["LC"] > 0 and ice40["dsp_unregistered"] == []
     md = markdown(rows, 1)
