@@ -96,23 +96,27 @@ def recip(p, v, key, width, frac, method="newton", iters=2, seed_bits=8, out="r"
 
 
 def rsqrt_stages(iters):
-    return 1 + 3 * iters
+    return 2 + 5 * iters
 
 
 def rsqrt(p, v, key, width, frac, iters=2, seed_bits=8, out="g"):
     """``v[out]`` ~ 2**frac / sqrt(m) for ``m = v[key] / 2**(width-2)`` in [1, 4) (``v[key]``
-    has ``width`` bits, top two bits not both 0): Newton-Raphson y' = y (3 - m y^2) / 2."""
+    has ``width`` bits, top two bits not both 0): Newton-Raphson y' = y (3 - m y^2) / 2.
+    The seed's output registered twice; per step y^2, m y^2 (``m`` in 18-bit slices),
+    3 - m y^2 (below 4: the seed is within 2**-7), and the product, each in its own stage."""
     lut = rsqrt_seed(seed_bits, frac)
     n = v[key]
     k = seed_bits - 1                                   # bits below the leading one
     addr = Cat(Mux(n[width - 1], n[width - 1 - k:width - 1], n[width - 2 - k:width - 2]),
                n[width - 1])
     v = p.stage(v, **{out: rom(p, lut, addr, "rsqrt_seed")})
+    v = p.stage(v)                                      # the table's output
     for _ in range(iters):
         y = v[out]
-        v = p.stage(v, _y2=(y * y) >> frac)
-        v = p.stage(v, _t=Const(3 << frac, unsigned(frac + 3))
-                    - ((v[key] * v.pop("_y2")) >> (width - 2)))
+        v = p.stage(v, _y2=((y * y) >> frac)[:frac + 1])
+        v = products(p, {**v, "_rsq_m": v[key]}, {"_my": ("_y2", "_rsq_m")})
+        v = p.stage(v, _t=(Const(3 << frac, unsigned(frac + 3))
+                           - (v.pop("_my") >> (width - 2)))[:frac + 2])
         v = p.stage(v, **{out: ((v[out] * v.pop("_t")) >> (frac + 1))[:frac + 1]})
     return v
 

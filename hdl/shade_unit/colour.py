@@ -9,7 +9,8 @@ kd x light_c x colour_c, ks x light_c)::
 
 Exact integer arithmetic: the golden model is bit-exact. 255 S is (S << 8) - S, no multiplier.
 Multipliers: 3 per light for diffuse, 3 more for specular (12 x 15 and 12 x 11 bits), their
-products registered. Latency 3: products, sum, level.
+products registered on both sides. Latency ``colour_stages``: clamp, products, a pairwise
+adder tree, 255 S, the level.
 """
 from amaranth.hdl import Mux
 
@@ -20,33 +21,46 @@ from .formats import COEF, LEVEL, ONE, POWER, RGB, colour_fields, light_fields
 FRAC = 24           # the sum's fraction bits: COEF (10) + VALUE (14)
 
 
+def colour_terms(lights, specular):
+    return 1 + lights * (2 if specular else 1)
+
+
+def colour_stages(lights, specular):
+    """Clamp, products, a pairwise adder tree, 255 S, the level."""
+    return 4 + (colour_terms(lights, specular) - 1).bit_length()
+
+
 def colour_lanes(p, v, lights, specular):
     """Consumes ``d<k>``, ``p<k>`` and the coefficient fields; gives ``r``, ``g``, ``b``."""
     v = dict(v)
-    dc = {k: (lambda d: Mux(d < 0, 0, Mux(d > ONE, ONE, d)))(v.pop(f"d{k}"))
-          for k in range(lights)}
+    v = p.stage(v, **{f"d{k}": (lambda d: Mux(d < 0, 0, Mux(d > ONE, ONE, d))[:15])(v[f"d{k}"])
+                      for k in range(lights)})                         # clamp(d, 0, 1)
     prods = {f"_a{c}": v.pop(f"amb_{c}") << FRAC - COEF.frac_bits for c in RGB}
     for k in range(lights):
+        dk = v.pop(f"d{k}")
         pk = v.pop(f"p{k}") if specular else None
         for c in RGB:
-            prods[f"_d{k}{c}"] = v.pop(f"kd{k}_{c}") * dc[k][:15]
+            prods[f"_d{k}{c}"] = v.pop(f"kd{k}_{c}") * dk
             if specular:
-                prods[f"_s{k}{c}"] = (v.pop(f"ks{k}_{c}") * pk) << FRAC - COEF.frac_bits \
-                    - POWER.frac_bits
+                prods[f"_s{k}{c}"] = v.pop(f"ks{k}_{c}") * pk
     v = p.stage(v, **prods)
-    sums = {}
-    for c in RGB:
-        terms = [v.pop(f"_a{c}")] + [v.pop(f"_{t}{k}{c}") for k in range(lights)
-                                     for t in ("d", "s") if specular or t == "d"]
-        total = terms[0]
-        for t in terms[1:]:
-            total = total + t
-        sums[f"_S{c}"] = total
-    v = p.stage(v, **sums)
+    shift = FRAC - COEF.frac_bits - POWER.frac_bits
+    terms = {c: [v.pop(f"_a{c}")] + [v.pop(f"_{t}{k}{c}") << (shift if t == "s" else 0)
+                                     for k in range(lights) for t in ("d", "s")
+                                     if specular or t == "d"] for c in RGB}
+    for _ in range((colour_terms(lights, specular) - 1).bit_length()):   # adder tree
+        new = {}
+        for c in RGB:
+            ts = terms[c]
+            for j in range(0, len(ts), 2):
+                new[f"_t{c}{j // 2}"] = ts[j] + ts[j + 1] if j + 1 < len(ts) else ts[j]
+        v = p.stage(v, **new)
+        terms = {c: [v.pop(f"_t{c}{j}") for j in range((len(terms[c]) + 1) // 2)] for c in RGB}
+    v = p.stage(v, **{f"_l{c}": ((s << 8) - s + (1 << FRAC - 1)) >> FRAC
+                      for c, (s,) in terms.items()})                   # 255 S, rounded
     out = {}
     for c in RGB:
-        s = v.pop(f"_S{c}")
-        level = ((s << 8) - s + (1 << FRAC - 1)) >> FRAC
+        level = v.pop(f"_l{c}")
         out[c] = Mux(level > LEVEL.max, LEVEL.max, level)[:LEVEL.width]
     return p.stage(v, **out)
 
@@ -56,7 +70,9 @@ class Colour(Unit):
     DOC = "Ambient + per light kd d colour + ks p, summed and clamped, to 8-bit RGB"
     PARAMS = {"lights": 1, "specular": True}
     RANGES = {"lights": (1, 4)}
-    latency = 3
+    @property
+    def latency(self):
+        return colour_stages(self.params["lights"], self.params["specular"])
 
     @property
     def inputs(self):

@@ -30,20 +30,24 @@ DOT_FRAC = 15                           # n.L before the last multiply: s17, [-2
 
 
 def phong_stages(iters):
-    return 2 + arith.rsqrt_stages(iters) + 1
+    return 4 + arith.rsqrt_stages(iters) + 3
 
 
 def phong_lanes(p, v, vectors, iters, seed_bits=8):
     """Normalise ``nx, ny, nz`` against each of ``vectors`` (``(vx, vy, vz, out)`` keys);
-    consumes the normal and the vectors, gives each ``out``."""
+    consumes the normal and the vectors, gives each ``out``. Every multiplier alone in its
+    stage (s16 operands: one DSP each)."""
     v = dict(v)
     n = [v.pop(k) for k in ("nx", "ny", "nz")]
     frac2 = 2 * VALUE.frac_bits
-    dots = {}
+    prods = {f"_q{a}": n[a] * n[a] for a in range(3)}
     for *keys, out in vectors:
-        vec = [v.pop(k) for k in keys]
-        dots[f"_dot_{out}"] = n[0] * vec[0] + n[1] * vec[1] + n[2] * vec[2]
-    v = p.stage(v, _q=(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) >> frac2 - Q_FRAC, **dots)
+        prods.update({f"_p{a}_{out}": n[a] * v.pop(k) for a, k in enumerate(keys)})
+    v = p.stage(v, **prods)
+    sums = {"_q": (v.pop("_q0") + v.pop("_q1") + v.pop("_q2")) >> frac2 - Q_FRAC}
+    for *_, out in vectors:
+        sums[f"_dot_{out}"] = v.pop(f"_p0_{out}") + v.pop(f"_p1_{out}") + v.pop(f"_p2_{out}")
+    v = p.stage(v, **sums)
     # dot products: round to DOT_FRAC fraction bits, saturate to s17
     lim = (1 << DOT_FRAC + 1) - 1
     new = {}
@@ -52,18 +56,22 @@ def phong_lanes(p, v, vectors, iters, seed_bits=8):
         new[f"_dot_{out}"] = Mux(d > lim, lim, Mux(d < -lim - 1, -lim - 1, d))[:DOT_FRAC + 2] \
             .as_signed()
     q = v.pop("_q")
-    q = Mux(q < Q_FLOOR, Q_FLOOR, q)[:Q_BITS]
+    v = p.stage(v, _q=Mux(q < Q_FLOOR, Q_FLOOR, q)[:Q_BITS], **new)
+    q = v.pop("_q")
     # even shift: leading one at bit 20 or 21 -> e = 0; 18-19 -> 1; 16-17 -> 2
     e = Mux(q[Q_BITS - 2:].any(), 0, Mux(q[Q_BITS - 4:Q_BITS - 2].any(), 1, 2))
-    v = p.stage(v, _m=(q << (2 * e))[:Q_BITS], _e=e, **new)
+    v = p.stage(v, _m=(q << (2 * e))[:Q_BITS], _e=e)
     v = arith.rsqrt(p, v, "_m", Q_BITS, G_FRAC, iters, seed_bits, out="_g")
     v.pop("_m")
-    g, e = v.pop("_g"), v.pop("_e")
+    g = v.pop("_g")
+    v = p.stage(v, **{f"_pr_{key}": v.pop(f"_dot_{key}") * g for *_, key in vectors})
     shift = DOT_FRAC + G_FRAC - VALUE.frac_bits
+    e = v.pop("_e")
+    v = p.stage(v, **{f"_r_{key}": ((v.pop(f"_pr_{key}") << e) + (1 << shift - 1)) >> shift
+                      for *_, key in vectors})
     out = {}
     for *_, key in vectors:
-        prod = (v.pop(f"_dot_{key}") * g) << e
-        r = (prod + (1 << shift - 1)) >> shift
+        r = v.pop(f"_r_{key}")
         out[key] = Mux(r > VALUE.max, VALUE.max, Mux(r < VALUE.min, VALUE.min, r))[:VALUE.width] \
             .as_signed()
     return p.stage(v, **out)

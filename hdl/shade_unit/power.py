@@ -6,7 +6,7 @@ The table is addressed by t = 1 - s (s clamped to [0, 1]) in floating-point bins
 below 2^-(14 - mant_bits). x^n is steep near x = 1, where t is small and the bins are fine, so
 the error is about the same for every n: about e^-1 / 2^(mant_bits + 1) of full scale at most
 (``Lut.max_error`` states it exactly). mant_bits = 6: 640 entries of 11 bits, one block RAM.
-Latency 2: the address is registered, then the ROM's output.
+Latency 4: 1 - s, the address, the ROM's read register, its output registered again.
 """
 import functools
 
@@ -36,17 +36,19 @@ def power_lut(shininess, mant_bits):
 
 
 def power_lanes(p, v, lanes, shininess, mant_bits):
-    """max(0, s)^n for several ``(s_key, p_key)`` side by side (2 stages); ``s`` is consumed."""
+    """max(0, s)^n for several ``(s_key, p_key)`` side by side (4 stages); ``s`` is consumed."""
     lut = power_lut(float(shininess), mant_bits)
     exp_lo, _ = power_bins(mant_bits)
-    addr = {}
+    ts = {}
     for s, _ in lanes:
         x = v.pop(s)
         t = ONE - Mux(x < 0, 0, Mux(x > ONE, ONE, x))                  # 1 - clamp(s, 0, 1)
-        addr[f"_a_{s}"] = float_address(t.as_unsigned()[:VALUE.frac_bits + 1],
-                                        VALUE.frac_bits, exp_lo, EXP_HI, mant_bits)
-    v = p.stage(v, **addr)
-    return p.stage(v, **{out: rom(p, lut, v.pop(f"_a_{s}"), "power") for s, out in lanes})
+        ts[f"_t_{s}"] = t.as_unsigned()[:VALUE.frac_bits + 1]
+    v = p.stage(v, **ts)
+    v = p.stage(v, **{f"_a_{s}": float_address(v.pop(f"_t_{s}"), VALUE.frac_bits, exp_lo,
+                                                EXP_HI, mant_bits) for s, _ in lanes})
+    v = p.stage(v, **{out: rom(p, lut, v.pop(f"_a_{s}"), "power") for s, out in lanes})
+    return p.stage(v)                                                   # the table's output
 
 
 class PowerTable(Unit):
@@ -56,7 +58,7 @@ class PowerTable(Unit):
     RANGES = {"shininess": (1.0, 1e9), "mant_bits": (3, 8)}
     inputs = (Field("s", VALUE),)
     outputs = (Field("p", POWER),)
-    latency = 2
+    latency = 4
 
     def datapath(self, p, v):
         return power_lanes(p, v, [("s", "p")], self.params["shininess"],
