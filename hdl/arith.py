@@ -70,8 +70,9 @@ def rsqrt_seed(seed_bits, frac):
 
 
 def recip_stages(method, iters, frac):
-    """Stages of :func:`recip`: the divider's quotient bits, or the seed and two per step."""
-    return frac + 1 if method == "divide" else 1 + 2 * iters
+    """Stages of :func:`recip`: the divider's quotient bits, or the seed (read, registered)
+    and two per step."""
+    return frac + 1 if method == "divide" else 2 + 2 * iters
 
 
 def recip(p, v, key, width, frac, method="newton", iters=2, seed_bits=8, out="r"):
@@ -87,6 +88,7 @@ def recip(p, v, key, width, frac, method="newton", iters=2, seed_bits=8, out="r"
     lut = recip_seed(seed_bits, frac)
     n = v[key]
     v = p.stage(v, **{out: rom(p, lut, n[width - 1 - seed_bits:width - 1], "recip_seed")})
+    v = p.stage(v)                                                    # the table's output
     for _ in range(iters):
         n, r = v[key], v[out]
         mr = (n * r) >> (width - 1)                                   # m r, frac bits

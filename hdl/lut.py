@@ -9,7 +9,7 @@ import functools
 import operator
 
 import numpy as np
-from amaranth.hdl import Mux, Signal, Value
+from amaranth.hdl import Cat, Mux, Signal, Value
 from amaranth.lib.memory import Memory
 
 from .fixed import Fixed
@@ -127,17 +127,30 @@ class RomRead:
 
 def rom(p, lut, addr, name):
     """A read of ``lut`` at ``addr``, for ``p.stage(v, out=rom(...))``: the value is the
-    table's registered output at the next stage. Use it through a plain register stage
-    (``v = p.stage(v)``) before any logic, so that the RAM's clock-to-output is not in series
-    with it. ``name`` is made unique within the module."""
+    table's read register at the next stage. Register it once more (a plain stage,
+    ``v = p.stage(v)``) before any logic, so that the RAM's clock-to-output (5.8 ns on ECP5
+    without its output register, which Yosys does not infer) is never in series with logic.
+    ``name`` is made unique within the module."""
     return RomRead(lut, addr, name)
+
+
+def slice_width(depth):
+    """Bits per memory slice: the widest ECP5 DP16KD shape (16 kbit) at least ``depth`` deep
+    (512 x 36 ... 16384 x 1). A table cut into such slices by width maps one RAM to each, and
+    Yosys never cascades it by depth, whose output mux would stand between the RAM and its
+    register."""
+    for d, w in ((512, 36), (1024, 18), (2048, 9), (4096, 4), (8192, 2)):
+        if depth <= d:
+            return w
+    return 1
 
 
 def read_roms(p, reads):
     """Build ``{key: RomRead}`` in pipeline ``p``: synchronous read ports enabled with the
-    stage, two reads of one table sharing a memory (a block RAM has two ports). A table of
-    ``2**k + 1`` entries (both ends of a quarter wave) keeps ``2**k`` in memory and its last
-    entry in a register, so it fits a power-of-two RAM. Returns ``{key: value}``."""
+    stage, two reads of one table sharing a memory (a block RAM has two ports), each table cut
+    by width into slices one RAM deep (``slice_width``), so nothing stands between a RAM and
+    its register: a table of ``2**k + 1`` entries (both ends of a quarter wave) takes RAMs
+    ``2**(k+1)`` deep rather than a mux for its last entry. Returns ``{key: value}``."""
     groups = {}
     for key, r in reads.items():
         groups.setdefault(id(r.lut), []).append((key, r))
@@ -146,21 +159,23 @@ def read_roms(p, reads):
         for at in range(0, len(group), 2):
             pair = group[at:at + 2]
             lut = pair[0][1].lut
-            depth = lut.depth
-            last = depth - 1 if depth > 2 and (depth - 1) & (depth - 2) == 0 else None
-            stored = lut.contents[:last] if last else lut.contents
-            mem = Memory(shape=lut.fmt.shape, depth=len(stored), init=[int(v) for v in stored])
-            p.m.submodules[p.unique("_".join(r.name for _, r in pair))] = mem
+            stored = np.asarray(lut.contents, np.int64)
+            raw = stored & ((1 << lut.fmt.width) - 1)            # two's complement bits
+            step = slice_width(len(stored))
+            name = p.unique("_".join(r.name for _, r in pair))
+            mems = []
+            for k, lo in enumerate(range(0, lut.fmt.width, step)):
+                bits = min(step, lut.fmt.width - lo)
+                init = [int(v) for v in (raw >> lo) & ((1 << bits) - 1)]
+                mems.append(Memory(shape=bits, depth=len(init), init=init))
+                p.m.submodules[name if lut.fmt.width <= step else f"{name}_{k}"] = mems[-1]
             for key, r in pair:
-                port = mem.read_port(domain="sync")
-                p.m.d.comb += [port.addr.eq(r.addr), port.en.eq(p.en)]
-                data = Value.cast(port.data)
-                if last:
-                    top = Signal(name=f"{r.name}_last", reset_less=True)
-                    with p.m.If(p.en):
-                        p.m.d.sync += top.eq(r.addr == last)
-                    data = Mux(top, int(lut.contents[last]), data)
-                out[key] = data
+                parts = []
+                for mem in mems:
+                    port = mem.read_port(domain="sync")
+                    p.m.d.comb += [port.addr.eq(r.addr), port.en.eq(p.en)]
+                    parts.append(port.data)
+                out[key] = Cat(*parts).as_signed() if lut.fmt.signed else Cat(*parts)
     return out
 
 
