@@ -59,6 +59,7 @@ DEVICES = {
               "cells": {"ICESTORM_LC": "LC", "ICESTORM_DSP": "DSP", "ICESTORM_RAM": "EBR"}},
 }
 SCENE = ROOT / "scenes" / "default.toml"
+FAILED_CELLS = {"TRELLIS_COMB": "LUT4", "TRELLIS_FF": "FF"}
 
 
 class SerialWrapper(wiring.Component):
@@ -130,7 +131,7 @@ def synthesise(label, name, params, device, root=OUT / "cache"):
     work.mkdir(parents=True, exist_ok=True)
     done = work / "synth.json"
     if done.exists():
-        return work, json.loads(done.read_text())
+        return work, _checked(work, device, json.loads(done.read_text()))
     (work / "top.v").write_text(text)
     script = (f"read_verilog top.v; hierarchy -top top; "
               f"setattr -mod -set keep_hierarchy 1 top.core; "
@@ -146,10 +147,16 @@ def synthesise(label, name, params, device, root=OUT / "cache"):
     core = mods.get("\\top.core", {}).get("num_cells_by_type", {})
     out = {"in_bits": wrap.bits[0], "out_bits": wrap.bits[1], "synth_s": round(seconds, 1),
            "wrapper_cells": wrapper, "core_cells": core}
-    if device == "ice40":
-        out["dsp_unregistered"] = unregistered_macs(json.loads((work / "net.json").read_text()))
     done.write_text(json.dumps(out, indent=1))
-    return work, out
+    return work, _checked(work, device, out)
+
+
+def _checked(work, device, synth):
+    """The synthesis summary with the iCE40 DSP check, made afresh from the netlist."""
+    if device == "ice40":
+        synth = {**synth, "dsp_unregistered":
+                 unregistered_macs(json.loads((work / "net.json").read_text()))}
+    return synth
 
 
 def unregistered_macs(netlist):
@@ -162,9 +169,10 @@ def unregistered_macs(netlist):
                 continue
             p = {k: int(v, 2) if isinstance(v, str) else v for k, v in c["parameters"].items()}
             ins = p["A_REG"] and p["B_REG"]
-            # 16x16 product out (select 3) through the pipeline register, or the accumulator
-            # register (select 1); each half has its own select
-            outs = all(p[sel] == 1 or (p[sel] == 3 and p["PIPELINE_16x16_MULT_REG2"])
+            # the product through one of the 16x16 pipeline registers (select 3), or through
+            # the output register (select 1); each half has its own select
+            piped = p["PIPELINE_16x16_MULT_REG1"] or p["PIPELINE_16x16_MULT_REG2"]
+            outs = all(p[sel] == 1 or (p[sel] == 3 and piped)
                        for sel in ("TOPOUTPUT_SELECT", "BOTOUTPUT_SELECT"))
             if not (ins and outs):
                 bad.append(_signal(name))
@@ -222,9 +230,10 @@ def summarise(label, device, synth, runs):
     if not fits:
         r = runs[0]
         over = r.get("over") or []
+        names = {**FAILED_CELLS, **cols}     # before placement only the cell counts exist
         row.update(fits=False, over=over, error=r.get("error"),
-                   util={cols.get(c, c): u["used"] for c, u in r.get("util", {}).items()
-                         if c in cols})
+                   util={names[c]: u["used"] for c, u in r.get("util", {}).items()
+                         if c in names})
         return row
     f = sorted(r["fmax"] for r in fits)
     median = statistics.median(f)
@@ -247,8 +256,11 @@ def wrapper_share(row, device):
 def markdown(rows, seeds):
     lines = [f"# Place and route ({seeds} seeds, median Fmax [min-max], target {TARGET_MHZ} MHz)",
              "", "Counts include the serial wrapper; its own share is in the last column. "
-             "iCE40: nextpnr times SB_MAC16 ports as registered, so a DSP's figure holds only "
-             "when the multiplier is registered on both sides (every unit here is).", ""]
+             "A design that does not fit names the resources that ran out, with what it "
+             "needs. iCE40: this nextpnr times every SB_MAC16 port as registered, so an Fmax "
+             "holds only where Yosys packed each multiplier's input and output registers into "
+             "its DSP; where it did not, the row says 'untimed' and the figure does not count.",
+             ""]
     for device, d in DEVICES.items():
         cols = list(d["cells"].values())
         lines += [f"## {d['label']}", "",
