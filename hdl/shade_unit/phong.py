@@ -30,14 +30,14 @@ DOT_FRAC = 15                           # n.L before the last multiply: s17, [-2
 
 
 def phong_stages(iters):
-    return 4 + arith.rsqrt_stages(iters) + 3
+    return 5 + arith.rsqrt_stages(iters) + 3
 
 
 def phong_lanes(p, v, vectors, iters, seed_bits=8):
     """Normalise ``nx, ny, nz`` against each of ``vectors`` (``(vx, vy, vz, out)`` keys);
     consumes the normal and the vectors, gives each ``out``. Every multiplier alone in its
     stage (s16 operands: one DSP each)."""
-    v = dict(v)
+    v = p.stage(v)          # the operands registered here, beside the 19 DSPs they feed
     n = [v.pop(k) for k in ("nx", "ny", "nz")]
     frac2 = 2 * VALUE.frac_bits
     prods = {f"_q{a}": n[a] * n[a] for a in range(3)}
