@@ -4,7 +4,8 @@ build time, and each path's speed as a ratio to the fastest. Writes ``build/benc
 and ``build/bench/bench.md``.
 
 Every simulator streams the same vectors (hard cases, then random rows), with ready and valid
-held high; the batch path streams them repeated up to ``--batch-rows`` so that its run is long
+held high; the default scene's pipeline renders the default scene's triangles (all of them on
+the batch path, the first few on the others); the batch path streams them repeated up to ``--batch-rows`` so that its run is long
 enough to time (its process start-up is included). Build times are those recorded when each
 model was built (models are cached under ``build/``).
 
@@ -29,6 +30,8 @@ OUT = BUILD / "bench"
 ROWS = {"amaranth": 5000, "icarus": 20000, "cocotb-verilator": 20000, "verilator": 20000}
 TRIANGLES = {"amaranth": 20, "icarus": 40, "cocotb-verilator": 40, "verilator": 40}
 RASTER = {"screen_bits": 10}
+SCENE = BUILD.parent / "scenes" / "default.toml"
+SCENE_TRIANGLES = {"amaranth": 2, "icarus": 4, "cocotb-verilator": 4}   # verilator: all
 
 
 def build_seconds(name, params, simulator):
@@ -44,14 +47,14 @@ def build_seconds(name, params, simulator):
     return float(path.read_text()) if path.exists() else None
 
 
-def measure(name, params, simulator, inputs):
+def measure(name, params, simulator, inputs, uniforms=None, label=None):
     unit = make_unit(name, spec=True, **params)
     seconds_build = build_seconds(name, params, simulator)        # builds it if need be
     t0 = time.perf_counter()
-    out, info = simulate(name, unit.params, inputs, simulator)
+    out, info = simulate(name, unit.params, inputs, simulator, uniforms=uniforms)
     seconds = time.perf_counter() - t0
     items = len(out["tri"]) if unit.status_ports else len(next(iter(out.values())))
-    return {"unit": name, "simulator": simulator, "rows_in": len(next(iter(inputs.values()))),
+    return {"unit": label or name, "simulator": simulator, "rows_in": len(next(iter(inputs.values()))),
             "items_out": items, "cycles": info["cycles"], "seconds": round(seconds, 3),
             "cycles_per_s": info["cycles"] / seconds, "items_per_s": items / seconds,
             "build_s": seconds_build}
@@ -60,19 +63,23 @@ def measure(name, params, simulator, inputs):
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m sim.bench", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--units", help="comma-separated units (default: all)")
+    ap.add_argument("--units", help="comma-separated units, 'scene' for the default scene's "
+                                    "pipeline (default: all of them)")
     ap.add_argument("--batch-rows", type=int, default=2_000_000,
                     help="rows the batch path streams, the vectors repeated (default 2,000,000;"
                          " raster: a thousandth as many triangles)")
     args = ap.parse_args(argv)
     with user_errors():
-        names = unit_names(args.units, UNITS)
+        names = unit_names(args.units, {**UNITS, "scene": None})
         sims = [s for s in SIMS if available(s) is None]
         for s in SIMS:
             if s not in sims:
                 print(f"note: {s} skipped: {available(s)}", file=sys.stderr)
         rows = []
         for name in names:
+            if name == "scene":
+                rows += scene_rows(sims)
+                continue
             params = RASTER if name == "raster" else {}
             full = make_unit(name, spec=True, **params).params
             many = name == "raster"
@@ -86,6 +93,22 @@ def main(argv=None):
                       f"{'triangles' if many else 'rows'}", file=sys.stderr, flush=True)
                 rows.append(measure(name, full, sim, inputs))
         report(rows)
+
+
+def scene_rows(sims):
+    """The default scene's pipeline rendering the default scene: every triangle on the batch
+    path, the first few on the others (fragments per second either way)."""
+    from golden.scene import load, prepare
+    prep = prepare(load(SCENE))
+    full = make_unit("scene", spec=True, **prep["params"]).params     # the key of its model
+    rows = []
+    for sim in sims:
+        n = SCENE_TRIANGLES.get(sim)
+        inputs = {k: v[:n] for k, v in prep["inputs"].items()}
+        print(f"scene_default on {sim}: {len(next(iter(inputs.values()))):,} triangles",
+              file=sys.stderr, flush=True)
+        rows.append(measure("scene", full, sim, inputs, prep["uniforms"], "scene_default"))
+    return rows
 
 
 def report(rows):
