@@ -87,7 +87,7 @@ def recip(p, v, key, width, frac, method="newton", iters=2, seed_bits=8, out="r"
         return v
     lut = recip_seed(seed_bits, frac)
     n = v[key]
-    v = p.stage(v, **{out: rom(p, lut, n[width - 1 - seed_bits:width - 1], "recip_seed")})
+    v = p.stage(v, **{out: rom(lut, n[width - 1 - seed_bits:width - 1], "recip_seed")})
     v = p.stage(v)                                                    # the table's output
     for _ in range(iters):
         n, r = v[key], v[out]
@@ -111,7 +111,7 @@ def rsqrt(p, v, key, width, frac, iters=2, seed_bits=8, out="g"):
     k = seed_bits - 1                                   # bits below the leading one
     addr = Cat(Mux(n[width - 1], n[width - 1 - k:width - 1], n[width - 2 - k:width - 2]),
                n[width - 1])
-    v = p.stage(v, **{out: rom(p, lut, addr, "rsqrt_seed")})
+    v = p.stage(v, **{out: rom(lut, addr, "rsqrt_seed")})
     v = p.stage(v)                                      # the table's output
     for _ in range(iters):
         y = v[out]

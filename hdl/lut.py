@@ -9,7 +9,7 @@ import functools
 import operator
 
 import numpy as np
-from amaranth.hdl import Cat, Mux, Signal, Value
+from amaranth.hdl import Cat, Mux, Value
 from amaranth.lib.memory import Memory
 
 from .fixed import Fixed
@@ -125,7 +125,7 @@ class RomRead:
         self.lut, self.addr, self.name = lut, Value.cast(addr), name
 
 
-def rom(p, lut, addr, name):
+def rom(lut, addr, name):
     """A read of ``lut`` at ``addr``, for ``p.stage(v, out=rom(...))``: the value is the
     table's read register at the next stage. Register it once more (a plain stage,
     ``v = p.stage(v)``) before any logic, so that the RAM's clock-to-output (5.8 ns on ECP5

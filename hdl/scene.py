@@ -18,11 +18,11 @@ from amaranth.lib.wiring import Out
 
 from .fixed import Field
 from .illum_unit.fenney_power import power_lanes as fenney_lanes
-from .setup_unit.formats import MODES, TRI, VALUE, coord, triangle_fields
-from .shade_unit.colour import Colour, colour_lanes
-from .shade_unit.formats import LEVEL, ONE, RGB, colour_fields, light_fields
+from .setup_unit.formats import MODES, VALUE, triangle_fields
+from .shade_unit.colour import colour_lanes
+from .shade_unit.formats import LEVEL, RGB, colour_fields, light_fields
 from .shade_unit.phong import Phong, phong_lanes
-from .shade_unit.power import PowerTable, power_lanes
+from .shade_unit.power import power_lanes
 from .span_unit.raster import Raster
 from .unit import Pipeline, Unit
 
@@ -149,12 +149,7 @@ class ScenePipeline(Unit):
                     v = colour_lanes(p, {**v, **{f.name: uni[f.name] for f in
                                                  colour_fields(q["lights"], q["specular"])}},
                                      q["lights"], q["specular"])
-        if p.stages != self.shading_latency:
-            raise AssertionError(f"scene: shading has {p.stages} stages, its parts say "
-                                 f"{self.shading_latency}")
-        m.d.comb += self.o.valid.eq(p.valid)
-        for f in self.outputs:
-            m.d.comb += self.o.payload[f.name].eq(v[f.name])
+        p.finish(self.o, v, self.outputs, self.shading_latency, "scene: shading")
         busy = raster.busy
         for valid in p.valids:
             busy = busy | valid

@@ -24,10 +24,10 @@ def cos_address(lut, angle, bits):
     return fold * (steps // quarter), negative
 
 
-def cos_lookup(p, lut, angle, bits, name):
+def cos_lookup(lut, angle, bits, name):
     """``(magnitude, negative)`` of cos(angle): an asynchronous ROM read and its sign bit."""
     addr, negative = cos_address(lut, angle, bits)
-    return rom(p, lut, addr, name), negative
+    return rom(lut, addr, name), negative
 
 
 def signed_cos(magnitude, negative):

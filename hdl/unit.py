@@ -134,6 +134,14 @@ class Pipeline:
     def valid(self):
         return self._valid
 
+    def finish(self, o, v, fields, stages, what):
+        """Drive stream ``o`` from the last stage: its valid, and each of ``fields`` from
+        ``v``; first check that the datapath has the ``stages`` its latency states."""
+        if self.stages != stages:
+            raise AssertionError(f"{what} has {self.stages} stages, its latency says {stages}")
+        self.m.d.comb += o.valid.eq(self._valid)
+        self.m.d.comb += [o.payload[f.name].eq(v[f.name]) for f in fields]
+
     @contextmanager
     def part(self, name):
         """Stages added inside go into a submodule ``name``, so a composed design keeps its
@@ -213,12 +221,7 @@ class Unit(wiring.Component):
         p = Pipeline(m, self.i, self.o)
         v = {f.name: self.i.payload[f.name] for f in self.inputs}
         v = self.datapath(p, v)
-        if p.stages != self.latency:
-            raise AssertionError(f"{self.NAME}: datapath has {p.stages} stages, "
-                                 f"latency says {self.latency}")
-        m.d.comb += self.o.valid.eq(p.valid)
-        for f in self.outputs:
-            m.d.comb += self.o.payload[f.name].eq(v[f.name])
+        p.finish(self.o, v, self.outputs, self.latency, f"{self.NAME}: datapath")
         return m
 
 

@@ -24,13 +24,13 @@ from hdl.units import UNITS, make_unit
 from .__main__ import simulate
 from .cli_common import unit_names, user_errors
 from .simulators import SIMS, available
-from .verilog import BUILD
+from .verilog import BUILD, SCENES
 
 OUT = BUILD / "bench"
 ROWS = {"amaranth": 5000, "icarus": 20000, "cocotb-verilator": 20000, "verilator": 20000}
 TRIANGLES = {"amaranth": 20, "icarus": 40, "cocotb-verilator": 40, "verilator": 40}
 RASTER = {"screen_bits": 10}
-SCENE = BUILD.parent / "scenes" / "default.toml"
+SCENE = SCENES / "default.toml"
 SCENE_TRIANGLES = {"amaranth": 2, "icarus": 4, "cocotb-verilator": 4}   # verilator: all
 
 

@@ -41,7 +41,7 @@ from amaranth.lib.wiring import In, Out
 from hdl.units import UNITS, make_unit
 
 from .cli_common import UsageError, unit_names, user_errors
-from .verilog import BUILD, ROOT
+from .verilog import BUILD, SCENES
 
 OUT = BUILD / "fpga"
 FLOW = "fpga-flow-1"          # bump when the scripts below change: the cache key includes it
@@ -58,7 +58,7 @@ DEVICES = {
                       "--pcf-allow-unconstrained"],
               "cells": {"ICESTORM_LC": "LC", "ICESTORM_DSP": "DSP", "ICESTORM_RAM": "EBR"}},
 }
-SCENE = ROOT / "scenes" / "default.toml"
+SCENE = SCENES / "default.toml"
 FAILED_CELLS = {"TRELLIS_COMB": "LUT4", "TRELLIS_FF": "FF"}
 
 
@@ -74,13 +74,26 @@ class SerialWrapper(wiring.Component):
         super().__init__({"sin": In(1), "shift": In(1), "cap": In(1), "iv": In(1),
                           "ordy": In(1), "sout": Out(1)})
 
+    def _sinks(self):
+        u = self.unit
+        return ([u.i.payload[f.name] for f in u.inputs]
+                + [getattr(u, f"u_{f.name}") for f in u.uniforms])
+
+    def _outs(self):
+        u = self.unit
+        return Cat(u.o.payload, u.o.valid, u.i.ready,
+                   *[getattr(u, name) for name in u.status_ports])
+
+    @property
+    def bits(self):
+        """(input bits shifted in, output bits shifted out)."""
+        return sum(len(s) for s in self._sinks()), len(self._outs())
+
     def elaborate(self, platform):
         m = Module()
         m.submodules.core = u = self.unit
-        sinks = [u.i.payload[f.name] for f in u.inputs]
-        sinks += [getattr(u, f"u_{f.name}") for f in u.uniforms]
-        total = sum(len(s) for s in sinks)
-        sr = Signal(max(total, 1))
+        sinks = self._sinks()
+        sr = Signal(max(self.bits[0], 1))
         with m.If(self.shift):
             m.d.sync += sr.eq(Cat(self.sin, sr[:-1]))
         at = 0
@@ -90,15 +103,13 @@ class SerialWrapper(wiring.Component):
         iv, ordy = Signal(), Signal()
         m.d.sync += [iv.eq(self.iv), ordy.eq(self.ordy)]
         m.d.comb += [u.i.valid.eq(iv), u.o.ready.eq(ordy)]
-        outs = Cat(u.o.payload, u.o.valid, u.i.ready,
-                   *[getattr(u, name) for name in u.status_ports])
+        outs = self._outs()
         cap = Signal(len(outs))
         with m.If(self.cap):
             m.d.sync += cap.eq(outs)
         with m.Else():
             m.d.sync += cap.eq(cap >> 1)
         m.d.comb += self.sout.eq(cap[0])
-        self.bits = (total, len(outs))
         return m
 
 
@@ -301,12 +312,11 @@ def run(names, devices, seeds, jobs, quiet=False, cache=OUT / "cache"):
             for seed in range(1, seeds + 1):
                 pnr[pool.submit(place, work, dev, seed)] = (label, dev)
         runs = {}
-        while pnr:
-            for fut in as_completed(list(pnr)):
-                label, dev = pnr.pop(fut)
-                runs.setdefault((label, dev), []).append(fut.result())
-                pb.update(1)
-                pb.set_postfix_str(f"{label} {dev} seed {fut.result()['seed']}")
+        for fut in as_completed(pnr):
+            label, dev = pnr[fut]
+            runs.setdefault((label, dev), []).append(fut.result())
+            pb.update(1)
+            pb.set_postfix_str(f"{label} {dev} seed {fut.result()['seed']}")
     rows = [summarise(label, dev, synths[label, dev], sorted(runs[label, dev],
                                                             key=lambda r: r["seed"]))
             for label, _, _, dev in todo]

@@ -15,7 +15,7 @@ import numpy as np
 from golden import scene as S
 from hdl.units import make_unit
 
-from .verilog import BUILD
+from .verilog import BUILD, SCENES
 
 __all__ = ["render", "compare", "gallery"]
 
@@ -127,7 +127,7 @@ def gallery(scenes_dir=None, simulator="verilator"):
     ``build/render/gallery.png``: each scene's RTL image labelled with its method and its PSNR
     against the reference, and the default scene's reference."""
     from PIL import Image, ImageDraw
-    scenes = sorted(Path(scenes_dir or Path(__file__).resolve().parent.parent / "scenes")
+    scenes = sorted(Path(scenes_dir or SCENES)
                     .glob("*.toml"), key=lambda p: (p.stem != "default", p.stem))
     tiles = []
     for path in scenes:

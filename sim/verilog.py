@@ -13,6 +13,7 @@ from hdl.units import make_unit
 
 ROOT = Path(__file__).resolve().parent.parent
 BUILD = ROOT / "build"
+SCENES = ROOT / "scenes"
 
 # Lint warnings we accept on Amaranth's output, and why. Everything else is fatal.
 LINT_ACCEPTED = {

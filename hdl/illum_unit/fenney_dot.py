@@ -89,7 +89,7 @@ class FenneyDot(Unit):
             big = n2 >= 65536
             n2_16 = Mux(big, n2 >> 2, n2)[:16]
             v = p.stage(v, big=big, _addr=n2_16 >> (16 - self.params["rsqrt_bits"]))
-            v = p.stage(v, g=rom(p, self.lut, v.pop("_addr"), "rsqrt"))
+            v = p.stage(v, g=rom(self.lut, v.pop("_addr"), "rsqrt"))
             v = p.stage(v)                                                 # the table's output
             v = p.stage(v, prod=v.pop("dot") * v.pop("g"))
             big, prod = v.pop("big"), v.pop("prod")

@@ -57,10 +57,10 @@ class FenneyPolar(Unit):
         v = dict(v)
         s, r, q = v.pop("s"), v.pop("r"), v.pop("q")
         lut = self.lut
-        cos_d, neg = cos_lookup(p, lut, r - q, 8, "cos_d")      # subtractor 16, unit 18
+        cos_d, neg = cos_lookup(lut, r - q, 8, "cos_d")      # subtractor 16, unit 18
         v = p.stage({**v,
-                     "sin_s": rom(p, lut, 256 - s, "sin_s"),     # sin S = cos(90 - S)
-                     "cos_s": rom(p, lut, s, "cos_s"),
+                     "sin_s": rom(lut, 256 - s, "sin_s"),     # sin S = cos(90 - S)
+                     "cos_s": rom(lut, s, "cos_s"),
                      "cos_d": cos_d, "neg": neg})                  # sign bit 26
         v = p.stage(v)                                               # the tables' outputs
         k2, k3 = v.pop("k2"), v.pop("k3")

@@ -43,7 +43,8 @@ def power_lanes(p, v, lanes):
     v = p.stage(v, **{f"_l{k}": Mux((v[f"_t{k}"] >> 3) > ONE, 0,                   # L
                                     ONE - (v.pop(f"_t{k}") >> 3))[:10] for k in n})
     v = p.stage(v, **{f"_q{k}": (v[f"_l{k}"] * v[f"_l{k}"]) >> 10 for k in n})       # Q
-    v = p.stage(v, **{f"_d{k}": v.pop(f"_q{k}") - v[f"_l{k}"] for k in n})           # Q - L
+    v = p.stage(v, **{f"_d{k}": (v.pop(f"_q{k}") - v[f"_l{k}"])[:11].as_signed()    # Q - L,
+                      for k in n})                                        # in [-1023, 0]
     v = p.stage(v, **{f"_m{k}": v.pop(f"_c{k}") * v.pop(f"_d{k}") for k in n})       # C (Q - L)
     return p.stage(v, **{key: (v.pop(f"_l{k}") + (v.pop(f"_m{k}") >> 8))[:10]         # P
                          for k, (_, _, key) in enumerate(lanes)})

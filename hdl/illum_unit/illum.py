@@ -74,7 +74,7 @@ class Illum(Unit):
                                                                            angle, bits)
         v = p.stage(v, **addrs)                                       # the tables' addresses
         for key in [k for k in addrs if not k.endswith("_neg")]:
-            v[key] = rom(p, self.cos_lut, v[key], key)
+            v[key] = rom(self.cos_lut, v[key], key)
         v = p.stage(v)                                                # six cosine look-ups
         v = p.stage(v)                                                # the tables' outputs
         for a in ("l", "h"):
@@ -102,6 +102,6 @@ class Illum(Unit):
                        v[f"dot_{a}"] >> (OUT_FRAC - self.params["table_bits"]))
                 for a in ("l", "h")}
         v = p.stage(v, **{f"_a{a}": addr[a] for a in ("l", "h")})
-        v = p.stage(v, diffuse=rom(p, diffuse, v.pop("_al"), "diffuse"),
-                    specular=rom(p, specular, v.pop("_ah"), "specular"))
+        v = p.stage(v, diffuse=rom(diffuse, v.pop("_al"), "diffuse"),
+                    specular=rom(specular, v.pop("_ah"), "specular"))
         return p.stage(v)                                             # the tables' outputs

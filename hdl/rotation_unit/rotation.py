@@ -119,7 +119,7 @@ class Rotation(Unit):
     def read(self, p, v, **reads):
         """Table reads ``key=(table, address key)`` (the addresses ``v[...]`` consumed),
         registered twice: the RAM's own read register, then a register before any logic."""
-        v = p.stage(v, **{k: rom(p, self.tables[tab], v.pop(a), k)
+        v = p.stage(v, **{k: rom(self.tables[tab], v.pop(a), k)
                           for k, (tab, a) in reads.items()})
         return p.stage(v)
 

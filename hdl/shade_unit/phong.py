@@ -14,7 +14,7 @@ so it fits one 18 x 18 multiplier.
 Multipliers: 3 for n.n, 3 per vector (L, and H with specular), 3 per Newton-Raphson step, one
 per output.
 """
-from amaranth.hdl import Cat, Const, Mux, signed
+from amaranth.hdl import Mux
 
 from .. import arith
 from ..fixed import Field

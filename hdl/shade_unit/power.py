@@ -47,7 +47,7 @@ def power_lanes(p, v, lanes, shininess, mant_bits):
     v = p.stage(v, **ts)
     v = p.stage(v, **{f"_a_{s}": float_address(v.pop(f"_t_{s}"), VALUE.frac_bits, exp_lo,
                                                 EXP_HI, mant_bits) for s, _ in lanes})
-    v = p.stage(v, **{out: rom(p, lut, v.pop(f"_a_{s}"), "power") for s, out in lanes})
+    v = p.stage(v, **{out: rom(lut, v.pop(f"_a_{s}"), "power") for s, out in lanes})
     return p.stage(v)                                                   # the table's output
 
 
