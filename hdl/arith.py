@@ -12,7 +12,7 @@ from amaranth.hdl import Cat, Const, Mux, signed, unsigned
 from .fixed import u
 from .lut import build_lut, rom
 
-__all__ = ["products", "leading_one", "normalise", "recip_stages", "recip", "rsqrt_stages", "rsqrt",
+__all__ = ["products", "leading_one", "leading_zeros", "normalise", "recip_stages", "recip", "rsqrt_stages", "rsqrt",
            "divide_stages", "floor_divide"]
 
 
@@ -45,14 +45,18 @@ def leading_one(value, width):
     return pos
 
 
-def normalise(value, width):
-    """``(n, s)`` with ``value = n * 2**(s - width + 1)``, ``n`` in ``[2**(width-1), 2**width)``
-    (a mantissa in [1, 2) with ``width - 1`` fraction bits) for nonzero ``value``."""
-    s = leading_one(value, width)
+def leading_zeros(value, width):
+    """``width - 1 - leading_one(value)``: the shift that normalises ``value``."""
     shamt = Const(width - 1, range(width))
     for k in range(width):
         shamt = Mux(value[k], width - 1 - k, shamt)
-    return (value << shamt)[:width], s
+    return shamt
+
+
+def normalise(value, width):
+    """``(n, s)`` with ``value = n * 2**(s - width + 1)``, ``n`` in ``[2**(width-1), 2**width)``
+    (a mantissa in [1, 2) with ``width - 1`` fraction bits) for nonzero ``value``."""
+    return (value << leading_zeros(value, width))[:width], leading_one(value, width)
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,25 +1,28 @@
-"""Triangle setup (seeds 001, 002): one triangle per clock, fully pipelined.
+"""Triangle setup (seeds 001, 002) as a schedule on one shared multiplier (``hdl.sched``).
 
 sort by (y, x) -> relative coordinates (seed 002 eq 9-12) -> Omega = x1 y2 - x2 y1 (eq 47),
 orientation, cull of Omega = 0 -> the reciprocal of |Omega| (normalised mantissa, Newton-Raphson
 or a divider) -> per channel the ortho-normalised coefficients a..f (seed 001 eq 16/32, seed 000
-eq 24-26) -> alpha_u, alpha_v per pixel step (eq 20) and each channel's second difference
-2A = 2 (a au^2 + b av^2 + c au av) (eq 22) -> the edge walkers' start values and steps.
+eq 24-26) -> alpha_u, alpha_v per pixel step (eq 20) and, per channel, the constants of the
+span's first difference -> the edge walkers' DDAs (six floor divisions, one bit per clock) and
+the exact integer numerators of (u, v) at the first row of each left edge and of the screen's
+left border, and their steps per row.
 
-The span engine evaluates Phi(u, v) and its first difference at the start of each span from u
-and v (exact integer numerators times the reciprocal), then steps along the span with two
-additions per pixel. Why these widths: ``Widths`` and docs/quadratic.md.
+The row engine (``hdl.span_unit.span``) turns a row's numerators into (u, v) with one product
+each, and Phi and its first difference from them. Why these widths: ``Widths`` and
+docs/quadratic.md.
 """
 from dataclasses import dataclass
 
-from amaranth.hdl import Const, Mux
+from amaranth.hdl import Cat, Const, Mux, signed
 
 from .. import arith
 from ..fixed import Field, s, u
+from ..sched import OPERAND, Schedule
 from .formats import EXACT_G_MAX, VALUE, coord, parse_modes
 
 RSQRT_ITERS = 2    # Newton-Raphson steps of the exact mid-edges' 1/sqrt (seed error 2**-9)
-G_FRAC = 30        # fraction bits of g = 1/||Ni + Nj||
+G_FRAC = 30        # fraction bits of g = 1/||Ni + Nj|| while it is computed (27 kept)
 
 __all__ = ["Widths", "Setup"]
 
@@ -27,13 +30,20 @@ __all__ = ["Widths", "Setup"]
 @dataclass(frozen=True)
 class Widths:
     """Fraction bits, derived in docs/quadratic.md ("Widths from analysis") for spans of up to
-    2**screen_bits pixels and an internal error of at most half an output LSB (2**-15)."""
+    2**screen_bits pixels and an internal error of at most half an output LSB (2**-15).
+    Multiplier operands are 35-bit signed (two 18 x 18 slices each way)."""
     screen_bits: int
     sub_bits: int
-    R: int = 28        # reciprocal mantissa (1/m in (1/2, 1]); also u and v's fraction bits
-    FC: int = 29       # coefficients a..f (exact products of VALUE and EDGE: 14 + 15)
-    FA: int = 36       # alpha_u, alpha_v per pixel, saturated to [-2, 2)
-    FI: int = 40       # Phi, its first difference and 2A in the span engine
+    R: int = 28        # reciprocal mantissa (1/m in (1/2, 1])
+    FC: int = 29       # coefficients a..f, exact (products of VALUE and EDGE: 14 + 15)
+    FO: int = 28       # a..f, Pu, Pv, t as operands: s(35, 28), [-64, 64)
+    FA: int = 34       # alpha_u, alpha_v per pixel as operands: s(35, 34), saturated to [-1, 1)
+    FQ: int = 32       # u, v at a span's start as operands: s(35, 32), modulo 4
+    FT: int = 27       # t1 = d + a u + c v and t2 = e + b v as operands: s(35, 27)
+
+    @property
+    def FI(self):                      # Phi, its first difference and 2A in the stepper
+        return 2 * self.screen_bits + 20
 
     @property
     def wc(self):                      # vertex coordinate width (sub-pixel units)
@@ -46,6 +56,10 @@ class Widths:
     @property
     def womega(self):                  # |Omega|, sub-pixel units squared
         return 2 * self.wrel
+
+    @property
+    def wn(self):                      # (u, v) numerators, tracked modulo 2**wn
+        return 2 * self.wrel + 2
 
     @property
     def wi(self):                      # an edge's pixel column (signed, within +-2**(sb+2))
@@ -64,67 +78,32 @@ class Widths:
         return self.screen_bits + 1
 
 
-def coef_fmt(w):
-    return s(w.FC + 7, w.FC)          # |a..f| < 64 covers every mode (docs: |c| <= 32)
-
-
-def a2_fmt(w):
-    return s(w.FI + 13, w.FI)         # |2A| <= 2 (16 + 16 + 32) 16 with |alpha| < 4
-
-
-def alpha_fmt(w):
-    return s(w.FA + 3, w.FA)
+def operand(frac):
+    return s(OPERAND, frac)
 
 
 EDGES = ("l", "s", "t")   # the long edge (top-bottom), the short ones (top-mid, mid-bottom)
+TRACKS = ("e0", "s0", "s1", "e1", "t0", "t1", "b0", "bs")   # numerator pairs, see Setup
 
 
-def setup_fields(w, channels):
-    """The coefficient stream from the setup unit to the span engine."""
-    c, rel = coord(w.screen_bits, w.sub_bits), s(w.wrel, w.sub_bits, "px")
-    f = [Field("tri", u(32)), Field("cull", u(1)), Field("left_long", u(1)),
-         Field("neg", u(1)), Field("j0", u(w.wrow)), Field("jm", u(w.wrow)),
-         Field("j1", u(w.wrow)), Field("xt", c), Field("yt", c)]
-    f += [Field(n, rel) for n in ("x1", "y1", "x2", "y2")]
-    f += [Field("r", u(w.R + 1, w.R)), Field("sh", u(len(range(w.womega)))),
-          Field("au", alpha_fmt(w)), Field("av", alpha_fmt(w))]
-    for e in EDGES:
-        f += [Field(f"{e}_i", s(w.wi)), Field(f"{e}_r", u(w.wden)),
-              Field(f"{e}_q", s(w.qstep + 1)), Field(f"{e}_d", u(w.wden)),
-              Field(f"{e}_n", u(w.wden))]
-    for ch in range(channels):
-        f += [Field(f"c{ch}_{k}", coef_fmt(w)) for k in "abcdef"]
-        f += [Field(f"c{ch}_a2", a2_fmt(w))]
-    return f
+def channel_fields(w, ch):
+    """Per channel: a..f, Pu, Pv (operands), P0 and 2A (FI fraction bits)."""
+    f = [Field(f"c{ch}_{k}", operand(w.FO)) for k in ("a", "b", "c", "d", "e", "f", "pu", "pv")]
+    return f + [Field(f"c{ch}_{k}", s(w.FI + 9, w.FI)) for k in ("p0", "a2")]
 
 
-def _round_shift(value, shift):
-    """value / 2**shift, rounded half up (shift > 0)."""
-    return (value + (1 << (shift - 1))) >> shift
-
-
-def _saturate(value, fmt):
-    return Mux(value > fmt.max, fmt.max, Mux(value < fmt.min, fmt.min, value))
+def _saturate(value, lo, hi):
+    return Mux(value > hi, hi, Mux(value < lo, lo, value))
 
 
 class Setup:
-    """The setup datapath; ``Raster`` runs it on its input pipeline."""
+    """The setup program; ``Raster`` runs it (``program``) on its own schedule."""
 
     def __init__(self, screen_bits, sub_bits, channels, modes, recip, recip_iters):
         self.w = Widths(screen_bits, sub_bits)
         self.channels = channels
         self.modes = parse_modes(modes, channels)
         self.recip, self.recip_iters = recip, recip_iters
-
-    @property
-    def latency(self):
-        """Stages: sort, relative, Omega and edge numerators, normalise; the reciprocal; the
-        edge divisions; the exact mid-edges' rsqrt (if a channel is exact); coefficients and
-        alpha; alpha squared; 2A. The parts run one after another (values ride along): a
-        longer latency, still one triangle per clock."""
-        recip = arith.recip_stages(self.recip, self.recip_iters, self.w.R)
-        exact = 3 * arith.rsqrt_stages(RSQRT_ITERS) + 2 if "exact" in self.modes else 0
-        return 4 + recip + arith.divide_stages(self.w.qstep) + exact + 3
 
     def sort(self, v):
         """Ranks by (y, x, index) -> vertices top/mid/bottom, edges and values in sorted labels."""
@@ -149,125 +128,215 @@ class Setup:
         for ch in range(self.channels):
             vals = [v.pop(f"v{ch}_{k}") for k in range(3)]
             out.update({f"i{ch}_{slot}": pick(slot, vals) for slot in range(3)})
-        return {**v, **out}
+        return out
 
     def rows(self, y):
         """ceil(y / S - 1/2): the first row whose centre is at or below y (exact shifts)."""
         S = 1 << self.w.sub_bits
         return (2 * y + S - 1) >> (self.w.sub_bits + 1)
 
-    def datapath(self, p, v):
+    def program(self, sc, v):
+        """The setup of one triangle on schedule ``sc`` from the input registers ``v``;
+        returns the walker's values (registers)."""
         w, S = self.w, 1 << self.w.sub_bits
         size = 1 << w.screen_bits
-        v = p.stage(self.sort(dict(v)))                                          # 1: sort
+        tri = v["tri"]
+        v = sc.lets(**self.sort(dict(v)))                                           # sort
         xt, yt = v["x0"], v["y0"]
         clamp = lambda j: Mux(j < 0, 0, Mux(j > size, size, j))
         j0, jm, j1 = (clamp(self.rows(v[f"y{k}"])) for k in range(3))
-        new = {"x1": v["x1"] - xt, "y1": v["y1"] - yt, "x2": v["x2"] - xt, "y2": v["y2"] - yt,
-               "xt": v.pop("x0"), "yt": v.pop("y0"), "xm": v.pop("x1"), "ym": v.pop("y1"),
-               "xb": v.pop("x2"), "yb": v.pop("y2"),
-               "j0": j0, "jm": Mux(jm < j0, j0, Mux(jm > j1, j1, jm)), "j1": j1}
-        v = p.stage(v, **new)                                                    # 2: relative
-        om = v["x1"] * v["y2"] - v["x2"] * v["y1"]
-        ends = {"l": ("xt", "yt", "xb", "yb", "j0"), "s": ("xt", "yt", "xm", "ym", "j0"),
-                "t": ("xm", "ym", "xb", "yb", "jm")}
-        new = {"omega": om}
+        r = sc.lets(x1=v["x1"] - xt, y1=v["y1"] - yt, x2=v["x2"] - xt, y2=v["y2"] - yt,
+                    j0=j0, jm=Mux(jm < j0, j0, Mux(jm > j1, j1, jm)), j1=j1)
+        x1, y1, x2, y2 = r["x1"], r["y1"], r["x2"], r["y2"]
+        out = {"tri": tri, "xt": xt, "yt": yt, "j0": r["j0"], "jm": r["jm"], "j1": r["j1"]}
+        om = sc.let("omega", sc.mul("x1y2", x1, y2) - sc.mul("x2y1", x2, y1))
+        # each edge's first column: ceil(((2 px - S) dy + (2 S j + S - 2 py) dx) / (2 S dy))
+        # (the row's crossing minus half a pixel), a floor division of num + den - 1
+        ends = {"l": ("x0", "y0", "x2", "y2", "j0"), "s": ("x0", "y0", "x1", "y1", "j0"),
+                "t": ("x1", "y1", "x2", "y2", "jm")}
+        div_jobs = []
         for e, (px, py, qx, qy, j) in ends.items():
-            dx, dy = v[qx] - v[px], v[qy] - v[py]
-            den = Mux(dy.any(), 2 * S * dy, 1)[:w.wden]
-            # i = ceil(((2 px - S) dy + (2 S j + S - 2 py) dx) / den): the row's crossing, minus
-            # half a pixel, in pixels; as a floor division of num + den - 1
-            new[f"{e}_num"] = (2 * v[px] - S) * dy + (2 * S * v[j] + S - 2 * v[py]) * dx + den - 1
-            new[f"{e}_n"] = den
-            new[f"{e}_dx2"] = 2 * S * dx
-        for k in ("xm", "ym", "xb", "yb"):
-            v.pop(k)
-        v = p.stage(v, **new)                                                    # 3: Omega
-        om = v.pop("omega")
-        n, sh = arith.normalise(abs(om)[:w.womega], w.womega)
-        v = p.stage(v, cull=~om.any(), neg=om < 0, left_long=om > 0, _n=n, sh=sh)  # 4
-        v = arith.recip(p, v, "_n", w.womega, w.R, self.recip, self.recip_iters)
-        v.pop("_n")
-        jobs = [(f"{e}_num", f"{e}_n", w.wi - 1, f"{e}_i", f"{e}_r") for e in EDGES]
-        jobs += [(f"{e}_dx2", f"{e}_n", w.qstep, f"{e}_q", f"{e}_d") for e in EDGES]
-        v = arith.floor_divide(p, v, jobs)
-        for e in EDGES:
-            v.pop(f"{e}_num"), v.pop(f"{e}_dx2")
-        if "exact" in self.modes:
-            v = self._exact_mid_edges(p, v)
-        return self._coefficients(p, v)
+            d = sc.lets(**{f"{e}_dx": v[qx] - v[px], f"{e}_dy": v[qy] - v[py]})
+            dx, dy = d[f"{e}_dx"], d[f"{e}_dy"]
+            den = sc.let(f"{e}_n", Mux(dy.any(), 2 * S * dy, 1)[:w.wden])
+            num = sc.let(f"{e}_num", sc.mul(f"{e}_ndy", 2 * v[px] - S, dy)
+                         + sc.mul(f"{e}_ndx", 2 * S * r[j] + S - 2 * v[py], dx) + den - 1)
+            div_jobs += [(e, "i", num, den, w.wi - 1), (e, "q", 2 * S * dx, den, w.qstep)]
+            out[f"{e}_n"] = den
+        # orientation, cull, |Omega| normalised: n in [2**(W-1), 2**W) and sh
+        W = w.womega
+        flags = sc.lets(cull=~om.any(), neg=om < 0, left_long=om > 0, mag=abs(om)[:W])
+        out.update(cull=flags["cull"], left_long=flags["left_long"])
+        norm = sc.lets(sh=arith.leading_one(flags["mag"], W),
+                       lz=arith.leading_zeros(flags["mag"], W))
+        sh = norm["sh"]
+        sc.shift = self.shift(sh)
+        n = sc.let("n", (flags["mag"] << norm["lz"])[:W])
+        rcp = self._reciprocal(sc, n, W)
+        rs = sc.let("rs", Mux(flags["neg"], -rcp, rcp))           # the sign of 1/Omega in it
+        out.update(rs=rs, sh=sh)
+        for e, kind, num, den, bits in div_jobs:
+            q, rem = self._floor_divide(sc, f"{e}_{kind}", num, den, bits)
+            out[f"{e}_{kind}"] = q
+            out[f"{e}_{'r' if kind == 'i' else 'd'}"] = rem
+        out.update(self._tracks(sc, r, out, xt, yt))
+        # alpha per pixel step: S y2 / Omega, -S y1 / Omega (eq 20), s(35, 34) saturated
+        lo, hi = -(1 << w.FA), (1 << w.FA) - 1
+        alpha = {k: sc.let(k, _saturate(sc.mul(f"{k}_raw", val, rs, shifted=True), lo, hi)
+                           .as_signed()[:OPERAND].as_signed())
+                 for k, val in (("au", y2), ("av", -y1))}
+        g = self._exact_mid_edges(sc, v) if "exact" in self.modes else {}
+        for ch, mode in enumerate(self.modes):
+            coef = self._channel(sc, v, g, ch, mode)
+            out.update({f"c{ch}_{k}": val for k, val in self._span(sc, coef, alpha, ch).items()})
+        return out
 
-    def _exact_mid_edges(self, p, v):
+    def shift(self, sh):
+        """The schedule's shift: alpha = y2 r 2**(sub_bits + FA - R - sh)."""
+        return sh, self.w.sub_bits + self.w.FA - self.w.R
+
+    def _reciprocal(self, sc, n, W):
+        """~ 2**R / m for the mantissa m = n / 2**(W-1): a table seed and Newton-Raphson steps
+        r' = r (2 - m r), or a restoring divider (truncating)."""
+        R = self.w.R
+        if self.recip == "divide":
+            q, _ = sc.divide("recip", Const(1 << (R + W - 1)), n, R + 1)
+            return q
+        rcp = sc.rom("recip_seed", arith.recip_seed(8, R), n[W - 9:W - 1])
+        nop = n[W - OPERAND + 1:] if W >= OPERAND else n                 # operand-wide m
+        drop = max(0, W - OPERAND + 1)
+        for k in range(self.recip_iters):
+            mr = sc.mul(f"mr{k}", nop, rcp, post=lambda p: (p >> (W - 1 - drop))[:R + 2])
+            t = sc.let(f"t{k}", (Const(2 << R, signed(R + 3)) - mr)[:R + 2])    # in (0, 2)
+            rcp = sc.mul(f"r{k}", rcp, t, post=lambda p: (p >> R)[:R + 1])
+        return rcp
+
+    @staticmethod
+    def _floor_divide(sc, name, num, den, bits):
+        """Signed floor division: q = floor(num / den), r = num - q den in [0, den), through
+        M = -num - 1 for negative numerators: q = -q(M) - 1, r = den - 1 - r(M)."""
+        pre = sc.lets(**{f"{name}_neg": num < 0,
+                         f"{name}_m": Mux(num < 0, -num - 1, num).as_unsigned()[:len(num)]})
+        neg = pre[f"{name}_neg"]
+        q, r = sc.divide(name, pre[f"{name}_m"], den, bits)
+        post = sc.lets(**{f"{name}_q": Mux(neg, -(q + 1), q + Const(0, signed(2))),
+                          f"{name}_r": Mux(neg, den - 1 - r, r)[:len(den)]})
+        return post[f"{name}_q"], post[f"{name}_r"]
+
+    def _tracks(self, sc, r, out, xt, yt):
+        """Exact (u, v) numerators nu = X y2 - Y x2, nv = Y x1 - X y1 (eq 18-20, sub-pixel
+        units, X and Y from the top vertex to a pixel centre) for the row engine, and their
+        steps: ``e0`` at the first left edge's first pixel, ``s0``/``s1`` its steps per row
+        without and with the DDA's carry, ``e1``, ``t0``, ``t1`` the same for the lower short
+        edge (from row jm), ``b0`` at column 0 of the first row, ``bs`` its step."""
+        w, S = self.w, 1 << self.w.sub_bits
+        x1, y1, x2, y2 = r["x1"], r["y1"], r["x2"], r["y2"]
+        wn = w.wn
+        mod = lambda x: x[:wn].as_signed() if len(x) > wn else x     # modulo 2**wn, signed
+        first_short = r["j0"] >= r["jm"]
+        sel = lambda k: Mux(out["left_long"], out[f"l_{k}"],
+                            Mux(first_short, out[f"t_{k}"], out[f"s_{k}"]))
+        pos = sc.lets(X0=S // 2 - xt, Y0=S * r["j0"] + S // 2 - yt, Ym=S * r["jm"] + S // 2 - yt,
+                      Xe=S * sel("i") + S // 2 - xt, Xt=S * out["t_i"] + S // 2 - xt,
+                      qe=sel("q"), qt=out["t_q"])
+        tr = {}
+
+        def pair(name, X, Y):
+            tr[name] = sc.lets(**{f"{name}_u": mod(sc.mul(f"{name}_xy2", X, y2)
+                                                - sc.mul(f"{name}_yx2", Y, x2)),
+                                  f"{name}_v": mod(sc.mul(f"{name}_yx1", Y, x1)
+                                                   - sc.mul(f"{name}_xy1", X, y1))})
+        pair("b0", pos["X0"], pos["Y0"])
+        pair("e0", pos["Xe"], pos["Y0"])
+        pair("e1", pos["Xt"], pos["Ym"])
+        for name, q in (("s", pos["qe"]), ("t", pos["qt"])):
+            qy2, qy1 = sc.mul(f"{name}_qy2", q, y2), sc.mul(f"{name}_qy1", q, y1)
+            tr[f"{name}0"] = sc.lets(**{f"{name}0_u": mod(S * (qy2 - x2)),
+                                        f"{name}0_v": mod(S * (x1 - qy1))})
+            st = tr[f"{name}0"]
+            tr[f"{name}1"] = sc.lets(**{f"{name}1_u": mod(st[f"{name}0_u"] + S * y2),
+                                        f"{name}1_v": mod(st[f"{name}0_v"] - S * y1)})
+        tr["bs"] = sc.lets(bs_u=mod(-S * x2), bs_v=mod(S * x1))
+        return {k: val for d in tr.values() for k, val in d.items()}
+
+    def _exact_mid_edges(self, sc, v):
         """g_ij = 1 / (2 sqrt(1 + e_ij)) (= 1/||Ni + Nj||), clamped at EXACT_G_MAX, by
-        Newton-Raphson from a table seed on the mantissa of 1 + e in [1, 4)."""
-        W, FG = 19, G_FRAC
-        new = {}
+        Newton-Raphson y' = y (3 - m y^2) / 2 from a table seed on the mantissa m of 1 + e in
+        [1, 4); kept with G_FRAC - 3 fraction bits (an operand)."""
+        Wm, FG = 19, G_FRAC
+        lut = arith.rsqrt_seed(8, FG)
+        gmax = int(EXACT_G_MAX) << (FG - 3)
+        g = {}
         for e in ("e12", "e13", "e23"):
             x = (v[e] + (1 << 15)).as_unsigned()[:17]                 # 1 + e, 15 fraction bits
             sh = Const(0, 5)                                           # even, top bit at 17/18
             for k in range(17):
                 sh = Mux(x[k], (18 - k) & ~1, sh)
-            new[f"_x{e}"] = (x << sh)[:W]
-            new[f"_s{e}"] = sh
-            new[f"_z{e}"] = ~x.any()
-        v = p.stage(v, **new)
-        for e in ("e12", "e13", "e23"):
-            v = arith.rsqrt(p, v, f"_x{e}", W, FG, RSQRT_ITERS, out=f"_g{e}")
-        new = {}
-        gmax = int(EXACT_G_MAX) << FG
-        for e in ("e12", "e13", "e23"):
-            v.pop(f"_x{e}")
-            g = (v.pop(f"_g{e}") << (v.pop(f"_s{e}") >> 1)) >> 2      # y 2**(sh/2 - 2)
-            new[f"g{e[1:]}"] = Mux(v.pop(f"_z{e}") | (g > gmax), gmax, g)
-        return p.stage(v, **new)
+            pre = sc.lets(**{f"{e}_x": (x << sh)[:Wm], f"{e}_sh": sh, f"{e}_z": ~x.any()})
+            m = pre[f"{e}_x"]
+            k = 7
+            addr = Cat(Mux(m[Wm - 1], m[Wm - 1 - k:Wm - 1], m[Wm - 2 - k:Wm - 2]), m[Wm - 1])
+            y = sc.rom(f"{e}_seed", lut, addr)
+            for it in range(RSQRT_ITERS):
+                y2 = sc.mul(f"{e}_yy{it}", y, y, post=lambda p: (p >> FG)[:FG + 1])
+                my = sc.mul(f"{e}_my{it}", y2, m, post=lambda p: p >> (Wm - 2))
+                t = sc.let(f"{e}_t{it}", (Const(3 << FG, signed(FG + 4)) - my)[:FG + 2])
+                y = sc.mul(f"{e}_y{it}", y, t, post=lambda p: (p >> (FG + 1))[:FG + 1])
+            gg = (y << (pre[f"{e}_sh"] >> 1)) >> 5                    # y 2**(sh/2 - 2), FG-3
+            g[f"g{e[1:]}"] = sc.let(f"g{e[1:]}", Mux(pre[f"{e}_z"] | (gg > gmax), gmax,
+                                                     gg)[:OPERAND - 1])
+        return g
 
-    def _channel(self, v, ch, mode):
+    def _channel(self, sc, v, g, ch, mode):
         """a..f of one channel, FC fraction bits (exact except the exact mode's mid-edges)."""
         w = self.w
-        I1, I2, I3 = (v.pop(f"i{ch}_{k}") for k in range(3))
+        I1, I2, I3 = (v[f"i{ch}_{k}"] for k in range(3))
         up = w.FC - VALUE.frac_bits
+        n = f"c{ch}"
         if mode == "linear":
             z = Const(0, 1)
             return {"a": z, "b": z, "c": z, "d": (I2 - I1) << up, "e": (I3 - I1) << up,
                     "f": I1 << up}
         if mode == "xshading":                                        # seed 001 eq 32
-            a, b = (I1 + I2) * v["e12"], (I1 + I3) * v["e13"]
-            c = a + b - (I2 + I3) * v["e23"]
+            a = sc.mul(f"{n}_a", I1 + I2, v["e12"])
+            b = sc.mul(f"{n}_b", I1 + I3, v["e13"])
+            c = a + b - sc.mul(f"{n}_c3", I2 + I3, v["e23"])
             return {"a": a, "b": b, "c": c, "d": ((I2 - I1) << up) - a,
                     "e": ((I3 - I1) << up) - b, "f": I1 << up}
         lo, hi = VALUE.min << up, VALUE.max << up                       # exact: eq 4-6, 16
+        shift = VALUE.frac_bits + G_FRAC - 3 - w.FC
 
-        def mid(Ia, Ib, g):
-            m = _round_shift((Ia + Ib) * v[g], VALUE.frac_bits + G_FRAC - w.FC)
-            return Mux(m < lo, lo, Mux(m > hi, hi, m))
-        I12, I13, I23 = mid(I1, I2, "g12"), mid(I1, I3, "g13"), mid(I2, I3, "g23")
+        def mid(name, Ia, Ib, gk):
+            m = sc.mul(f"{n}_{name}", Ia + Ib, g[gk],
+                       post=lambda p: (p + (1 << (shift - 1))) >> shift)
+            return _saturate(m, lo, hi)
+        I12, I13, I23 = mid("m12", I1, I2, "g12"), mid("m13", I1, I3, "g13"), \
+            mid("m23", I2, I3, "g23")
         L, M, N = I1 << up, I2 << up, I3 << up
         a, b = 2 * (L + M - 2 * I12), 2 * (L + N - 2 * I13)
         return {"a": a, "b": b, "c": 4 * (L + I23 - I13 - I12), "d": M - L - a, "e": N - L - b,
                 "f": L}
 
-    def _coefficients(self, p, v):
-        w = self.w
-        new = {}
-        for ch, mode in enumerate(self.modes):
-            new.update({f"c{ch}_{k}": val for k, val in self._channel(v, ch, mode).items()})
-        for e in ("e12", "e13", "e23", "g12", "g13", "g23"):
-            v.pop(e, None)
-        # alpha per pixel step: S y2 / Omega, -S y1 / Omega (eq 20), saturated
-        r, sh = v["r"], v["sh"]
-        up = w.sub_bits + w.FA - w.R
-        fmt = alpha_fmt(w)
-        for name, val in (("au", v["y2"]), ("av", -v["y1"])):
-            a = ((val * r) << up) >> sh
-            new[name] = _saturate(Mux(v["neg"], -a, a), fmt)
-        v = p.stage(v, **new)                                                    # coefficients
-        au, av = v["au"], v["av"]
-        sq = 2 * w.FA - w.FI
-        v = p.stage(v, _uu=(au * au) >> sq, _vv=(av * av) >> sq, _uv=(au * av) >> sq)
-        uu, vv, uv = v.pop("_uu"), v.pop("_vv"), v.pop("_uv")
-        new = {}
-        for ch in range(self.channels):
-            a, b, c = (v[f"c{ch}_{k}"] for k in "abc")
-            new[f"c{ch}_a2"] = (a * uu + b * vv + c * uv) >> (w.FC - 1)          # 2A, FI bits
-        return p.stage(v, **new)
-
+    def _span(self, sc, coef, alpha, ch):
+        """The row engine's constants of one channel: a..f as operands, and the first
+        difference along x at a span's start, d = Pu u + Pv v + P0, with Pu = 2 a au + c av,
+        Pv = 2 b av + c au, P0 = d au + e av + A, and 2A = 2 (au (a au + c av) + av (b av))
+        (eq 22)."""
+        w, n = self.w, f"c{ch}"
+        op = lambda x: x.as_signed()[:OPERAND].as_signed()
+        c = sc.lets(**{f"{n}_{k}": op(val >> (w.FC - w.FO)) for k, val in coef.items()})
+        a, b, cc, d, e = (c[f"{n}_{k}"] for k in "abcde")
+        au, av = alpha["au"], alpha["av"]
+        FP = w.FO + w.FA                                     # fraction bits of a product
+        aau, cav, bav = (sc.mul(f"{n}_{k}", x, y) for k, x, y in
+                         (("aau", a, au), ("cav", cc, av), ("bav", b, av)))
+        cau, dau, eav = (sc.mul(f"{n}_{k}", x, y) for k, x, y in
+                         (("cau", cc, au), ("dau", d, au), ("eav", e, av)))
+        t = sc.lets(**{f"{n}_t": op((aau + cav) >> w.FA), f"{n}_bv": op(bav >> w.FA),
+                       f"{n}_pu": op((2 * aau + cav) >> w.FA),
+                       f"{n}_pv": op((2 * bav + cau) >> w.FA)})
+        a2 = sc.let(f"{n}_a2", (sc.mul(f"{n}_ut", au, t[f"{n}_t"])
+                                + sc.mul(f"{n}_vb", av, t[f"{n}_bv"])) >> (FP - w.FI - 1))
+        p0 = sc.let(f"{n}_p0", ((dau + eav) >> (FP - w.FI)) + (a2 >> 1))
+        return {**{k: c[f"{n}_{k}"] for k in "abcdef"}, "pu": t[f"{n}_pu"],
+                "pv": t[f"{n}_pv"], "p0": p0, "a2": a2}

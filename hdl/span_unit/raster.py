@@ -1,18 +1,23 @@
 """``raster``: the setup unit and the span engine on one clock (seeds 000-002).
 
 In: triangles (``x0 y0 x1 y1 x2 y2``, ``e01 e02 e12``, ``v{k}_0..2`` per channel); out: one
-fragment per clock, ``tri x y v{k}``, ``tri`` being the input row's index. The setup takes one
-triangle per clock (a pipeline of ``Setup.latency`` stages) and works ahead of the span engine
-while it walks the previous triangles. Status outputs: ``busy`` (work in flight) and
-``culled`` (degenerate triangles, Omega = 0, dropped).
+fragment per clock, ``tri x y v{k}``, ``tri`` being the input row's index. The setup is a
+schedule on one shared multiplier (``Setup.program``, ``setup_clocks`` per triangle); it works
+on the next triangle while the walker and the row engine (``channels + 1`` multipliers, a row
+every ``row_ii`` clocks) and the stepper (one fragment per clock) work on the current one.
+Status outputs: ``busy`` (work in flight) and ``culled`` (degenerate triangles, Omega = 0,
+dropped).
 """
-from amaranth.hdl import Module, Signal
+import functools
+
+from amaranth.hdl import Const, Module, Signal
 from amaranth.lib.wiring import Out
 
+from ..sched import Schedule
 from ..setup_unit.formats import MODES, fragment_fields, parse_modes, triangle_fields
-from ..setup_unit.setup import Setup, setup_fields
-from ..unit import Pipeline, Unit
-from .span import ROW_EVAL_STAGES, Link, row_eval, stepper, walker
+from ..setup_unit.setup import Setup
+from ..unit import Unit
+from .span import Link, row_engine, stepper, walker
 
 __all__ = ["Raster"]
 
@@ -47,10 +52,17 @@ class Raster(Unit):
         return fragment_fields(self.params["screen_bits"], self.params["channels"])
 
     @property
+    def timing(self):
+        """``(setup_clocks, row_ii, row_clocks)``: the setup's clocks per triangle, the row
+        engine's clocks per row and its latency (from the schedules themselves)."""
+        return _timing(tuple(sorted(self.params.items())))
+
+    @property
     def latency(self):
         """From a triangle in to its first fragment out, when nothing waits: the setup, the
-        walker's load, the row evaluation, the stepper's load."""
-        return self.setup.latency + 1 + ROW_EVAL_STAGES + 1
+        walker's load, the row engine, the stepper's load."""
+        setup_clocks, _, row_clocks = self.timing
+        return setup_clocks + 1 + row_clocks + 1
 
     def elaborate(self, platform):
         m = Module()
@@ -59,26 +71,39 @@ class Raster(Unit):
         count = Signal(32)
         with m.If(self.i.valid & self.i.ready):
             m.d.sync += count.eq(count + 1)
-        coef = Link("coef")
-        p = Pipeline(m, self.i, coef)
-        v = {f.name: self.i.payload[f.name] for f in self.inputs}
-        v = setup.datapath(p, {**v, "tri": count})
-        if p.stages != setup.latency:
-            raise AssertionError(f"setup has {p.stages} stages, latency says {setup.latency}")
-        m.d.comb += coef.valid.eq(p.valid)
-        missing = {f.name for f in setup_fields(w, ch)} - set(v)
-        if missing:
-            raise AssertionError(f"setup does not produce {sorted(missing)}")
+        sc = Schedule(m, "su", Const(1))
+        running, done = Signal(), Signal()
+        src_ready = Signal()
+        m.d.comb += [sc.start.eq(self.i.valid & self.i.ready),
+                     self.i.ready.eq(~running & (~done | src_ready))]
+        v = {f.name: sc.input(f.name, self.i.payload[f.name]) for f in self.inputs}
+        v["tri"] = sc.input("tri", count)
+        coef = setup.program(sc, v)
+        sc.finish()
+        last = sc.at(sc.length - 1)
+        with m.If(sc.start):
+            m.d.sync += running.eq(1)
+        with m.Elif(last):
+            m.d.sync += running.eq(0)
+        with m.If(last):
+            m.d.sync += done.eq(1)
+        with m.Elif(src_ready):
+            m.d.sync += done.eq(0)
         rows_in, rows_out = Link("rows_in"), Link("rows_out")
         culled = Signal(32)
-        rows = walker(m, w, ch, v, coef.valid, coef.ready, rows_in, culled)
-        q = Pipeline(m, rows_in, rows_out)
-        rows = row_eval(q, w, ch, rows)
-        assert q.stages == ROW_EVAL_STAGES
-        m.d.comb += rows_out.valid.eq(q.valid)
+        rows = walker(m, w, ch, coef, done, src_ready, rows_in, culled)
+        rows, re = row_engine(m, w, ch, rows, rows_in, rows_out)
         cur = stepper(m, w, ch, rows, rows_out, self.o)
-        busy = cur | rows_in.valid
-        for valid in p.valids + q.valids:
-            busy = busy | valid
+        busy = cur | rows_in.valid | rows_out.valid | running | done
+        for k in range(1, re.length):
+            busy = busy | re.at(k)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
+        self._timing = (sc.length, re.ii, re.length)
         return m
+
+
+@functools.lru_cache(maxsize=None)
+def _timing(items):
+    unit = Raster(**dict(items))
+    unit.elaborate(None)
+    return unit._timing

@@ -19,9 +19,10 @@ Three parts, each a stream stage with backpressure:
 """
 from amaranth.hdl import Mux, Signal
 
+from ..sched import OPERAND, Schedule
 from ..setup_unit.formats import VALUE
 
-__all__ = ["Link", "walker", "row_eval", "stepper"]
+__all__ = ["Link", "walker", "row_engine", "stepper"]
 
 
 class Link:
@@ -38,21 +39,24 @@ def _step(i, r, q, d, n):
     return Mux(rr < 0, i + q + 1, i + q), Mux(rr < 0, rr + n, rr)
 
 
-TRIANGLE_KEEP = ("tri", "xt", "yt", "x1", "y1", "x2", "y2", "r", "sh", "neg", "au", "av")
-
-
 def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
-    """Rows from triangles. ``src``: the setup unit's output values; returns the row values."""
+    """Rows from triangles. ``src``: the setup's values; returns the row values: the span
+    ``[xs, xe)`` of row ``j``, the (u, v) numerators of its first pixel (``nu``, ``nv``) and
+    the triangle's constants."""
     size = 1 << w.screen_bits
     have = Signal()
     j, j1, jm = Signal(w.wrow), Signal(w.wrow), Signal(w.wrow)
     left_long = Signal()
-    keep = list(TRIANGLE_KEEP) + [f"c{ch}_{k}" for ch in range(channels)
-                                  for k in ("a", "b", "c", "d", "e", "f", "a2")]
+    keep = ["tri", "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels)
+                                  for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")]
     held = {k: Signal.like(src[k], name=f"w_{k}") for k in keep}
     edge = {}
     for e in ("l", "s", "t"):
         edge[e] = {k: Signal.like(src[f"{e}_{k}"], name=f"w_{e}_{k}") for k in "irqdn"}
+    # numerator tracks: the left edge's first pixel (E), column 0 (B); their steps
+    tr = {k: Signal(w.wn, name=f"w_{k}") for k in
+          ("E_u", "E_v", "B_u", "B_v", "s0_u", "s0_v", "s1_u", "s1_v", "e1_u", "e1_v",
+           "t0_u", "t0_v", "t1_u", "t1_v", "bs_u", "bs_v")}
     accept = have & out_link.ready
     last = j + 1 == j1
     load = src_valid & (~have | (accept & last))
@@ -72,6 +76,8 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
             m.d.sync += [edge[e][k].eq(val) for k, val in init(e).items()]
         s_init, t_init = init("s"), init("t")
         m.d.sync += [edge["s"][k].eq(Mux(first_short, t_init[k], s_init[k])) for k in "irqdn"]
+        m.d.sync += [tr[k].eq(src[k]) for k in tr if k[0] not in "EB"]
+        m.d.sync += [tr[f"{t}_{a}"].eq(src[f"{t.lower()}0_{a}"]) for t in "EB" for a in "uv"]
         with m.If(src["cull"]):
             m.d.sync += culled.eq(culled + 1)
     with m.Elif(accept):
@@ -81,61 +87,77 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
         li, lr = _step(*(edge["l"][k] for k in "irqdn"))
         m.d.sync += [edge["l"]["i"].eq(li), edge["l"]["r"].eq(lr)]
         si, sr = _step(*(edge["s"][k] for k in "irqdn"))
+        carry = Mux(left_long, edge["l"]["r"] < edge["l"]["d"], edge["s"]["r"] < edge["s"]["d"])
+        switch = ~left_long & (j + 1 == jm)
         with m.If(j + 1 == jm):
             m.d.sync += [edge["s"][k].eq(edge["t"][k]) for k in "irqdn"]
         with m.Else():
             m.d.sync += [edge["s"]["i"].eq(si), edge["s"]["r"].eq(sr)]
+        for a in "uv":
+            m.d.sync += tr[f"B_{a}"].eq(tr[f"B_{a}"] + tr[f"bs_{a}"])
+            with m.If(switch):
+                m.d.sync += [tr[f"E_{a}"].eq(tr[f"e1_{a}"]), tr[f"s0_{a}"].eq(tr[f"t0_{a}"]),
+                             tr[f"s1_{a}"].eq(tr[f"t1_{a}"])]
+            with m.Else():
+                m.d.sync += tr[f"E_{a}"].eq(tr[f"E_{a}"] + Mux(carry, tr[f"s1_{a}"],
+                                                                tr[f"s0_{a}"]))
     clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
     xl = Mux(left_long, edge["l"]["i"], edge["s"]["i"])
     xr = Mux(left_long, edge["s"]["i"], edge["l"]["i"])
-    return {"j": j, "xs": clamp(xl), "xe": clamp(xr), **held}
+    border = xl < 0                               # the span starts at column 0
+    num = {f"n{a}": Mux(border, tr[f"B_{a}"], tr[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
+           for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
+    return {"j": j, "xs": clamp(xl), "xe": clamp(xr), **num, **held}
 
 
-def row_eval(p, w, channels, v):
-    """Phi and its first difference at each span's first pixel centre (pipelined)."""
-    S = 1 << w.sub_bits
-    v = dict(v)
-    X = v["xs"] * S + S // 2 - v.pop("xt")
-    Y = v["j"] * S + S // 2 - v.pop("yt")
-    x1, y1, x2, y2 = (v.pop(k) for k in ("x1", "y1", "x2", "y2"))
-    v = p.stage(v, nu=X * y2 - Y * x2, nv=Y * x1 - X * y1)
-    neg, r, sh = v.pop("neg"), v.pop("r"), v.pop("sh")
-    nu, nv = v.pop("nu"), v.pop("nv")
-    v = p.stage(v, su=Mux(neg, -(nu * r), nu * r) >> sh, sv=Mux(neg, -(nv * r), nv * r) >> sh)
-    cu = w.FC + w.R - w.FI                     # coefficient x u -> FI fraction bits
-    up = w.FI - w.FC
-    new = {}
+def row_engine(m, w, channels, rows, row_link, out_link):
+    """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
+    shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
+    then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
+    d = P0 + Pu u + Pv v. Returns the row values for the stepper."""
+    mults = channels + 1
+    ii = -(-(2 + 7 * channels) // mults)
+    en = Signal(name="re_en")
+    out_valid = Signal(name="re_out_valid")
+    sc = Schedule(m, "re", en, ii=ii, mults=mults)
+    start = row_link.valid & sc.aligned
+    m.d.comb += [en.eq(~out_valid | out_link.ready), sc.start.eq(start),
+                 row_link.ready.eq(en & sc.aligned), out_link.valid.eq(out_valid)]
+    v = {k: sc.input(k, val) for k, val in rows.items()}
+    sc.shift = (v["sh"], w.FQ - w.R)
+    fq = lambda x: x[:OPERAND].as_signed()
+    u = sc.mul("u", v["nu"], v["rs"], post=fq, shifted=True)
+    vv = sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True)
+    FP = w.FO + w.FQ                                     # fraction bits of coefficient x u
+    out = {}
     for ch in range(channels):
-        a, b, c = (v[f"c{ch}_{k}"] for k in "abc")
-        new.update({f"_au{ch}": (a * v["su"]) >> cu, f"_cv{ch}": (c * v["sv"]) >> cu,
-                    f"_bv{ch}": (b * v["sv"]) >> cu, f"_cu{ch}": (c * v["su"]) >> cu})
-    v = p.stage(v, **new)
-    new = {}
-    for ch in range(channels):
-        for k in ("a", "b", "c"):
-            v.pop(f"c{ch}_{k}")
-        au, cv, bv, cu_ = (v.pop(f"_{k}{ch}") for k in ("au", "cv", "bv", "cu"))
-        d, e = v.pop(f"c{ch}_d") << up, v.pop(f"c{ch}_e") << up
-        new.update({f"_pu{ch}": 2 * au + cv + d, f"_pv{ch}": 2 * bv + cu_ + e,
-                    f"_t1{ch}": d + au + cv, f"_t2{ch}": e + bv})
-    v = p.stage(v, **new)
-    new = {}
-    for ch in range(channels):
-        new.update({f"_ut{ch}": (v["su"] * v.pop(f"_t1{ch}")) >> w.R,
-                    f"_vt{ch}": (v["sv"] * v.pop(f"_t2{ch}")) >> w.R,
-                    f"_dpu{ch}": (v["au"] * v.pop(f"_pu{ch}")) >> w.FA,
-                    f"_dpv{ch}": (v["av"] * v.pop(f"_pv{ch}")) >> w.FA})
-    v.pop("su"), v.pop("sv")
-    v = p.stage(v, **new)
-    new = {}
-    for ch in range(channels):
-        new[f"phi{ch}"] = (v.pop(f"c{ch}_f") << up) + v.pop(f"_ut{ch}") + v.pop(f"_vt{ch}")
-        new[f"d{ch}"] = v.pop(f"_dpu{ch}") + v.pop(f"_dpv{ch}") + (v[f"c{ch}_a2"] >> 1)
-    v.pop("au"), v.pop("av")
-    return p.stage(v, **new)
-
-
-ROW_EVAL_STAGES = 6
+        c = {k: v[f"c{ch}_{k}"] for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")}
+        au, cv, bv = sc.mul(f"au{ch}", c["a"], u), sc.mul(f"cv{ch}", c["c"], vv), \
+            sc.mul(f"bv{ch}", c["b"], vv)
+        pu, pv = sc.mul(f"pu{ch}", c["pu"], u), sc.mul(f"pv{ch}", c["pv"], vv)
+        t1 = sc.apply(f"t1_{ch}", lambda d, x, y: fq(((d << w.FQ) + x + y) >> (FP - w.FT)),
+                      c["d"], au, cv)
+        t2 = sc.apply(f"t2_{ch}", lambda e, x: fq(((e << w.FQ) + x) >> (FP - w.FT)), c["e"], bv)
+        ut, vt = sc.mul(f"ut{ch}", u, t1), sc.mul(f"vt{ch}", vv, t2)
+        shift = w.FQ + w.FT - w.FI
+        k = sc._when(ut, vt, pu, pv)
+        out[f"phi{ch}"] = sc.apply(f"phi{ch}", lambda f, x, y: (f << (w.FI - w.FO))
+                                   + ((x + y) >> shift), c["f"], ut, vt, after=k)
+        out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0, x, y: p0 + ((x + y) >> (FP - w.FI)),
+                                 c["p0"], pu, pv, after=k)
+        out[f"c{ch}_a2"] = c["a2"]
+    end = max(sc.ready[x] for x in out.values() if x in sc.ready)
+    for k in ("j", "xs", "xe", "tri"):
+        out[k] = v[k]
+    out = {k: sc.apply(f"o_{k}", lambda r: r, x, after=end) for k, x in out.items()}
+    sc.outputs.update(out.values())
+    with m.If(en):
+        m.d.sync += out_valid.eq(sc.at(end))
+    with m.Elif(out_link.ready):
+        m.d.sync += out_valid.eq(0)
+    sc.finish()
+    sc.check()
+    return out, sc
 
 
 def stepper(m, w, channels, rows, row_link, o):

@@ -1,0 +1,277 @@
+"""A static schedule: one job's operations (a triangle's setup, a row's start values) at fixed
+clock offsets from the job's start, on a few shared multipliers.
+
+Each operation is placed, in program order, at the first offset where its operands are ready
+(and, for a product, where a multiplier is free). Offsets are a one-hot delay line of the
+start pulse, so several jobs may be in flight. With ``ii``, jobs start only on every ``ii``-th
+clock (``aligned``, a free-running count), the multipliers are reserved modulo ``ii``, and a
+register read more than ``ii`` offsets after it was written is read from a copy (``late``),
+so the next job never overwrites a value before its last read (:meth:`Schedule.check`).
+Everything advances with one enable, so a stalled schedule holds every value.
+
+A product: operands are registered (the DSP's input registers), the four 18 x 18 partial
+products of two 35-bit signed operands registered (one MULT18X18D each), their sum registered;
+the middle two summed, then added to the outer two (which do not overlap), each registered;
+the result is written at ``issue + MUL_LAT`` and readable one clock later.
+"""
+from amaranth.hdl import Cat, Mux, Signal, Value, signed, unsigned
+from amaranth.hdl._ast import SignalDict, SignalSet   # Signals are not hashable
+from amaranth.lib.memory import Memory
+
+__all__ = ["Schedule", "OPERAND", "MUL_LAT"]
+
+OPERAND = 35          # signed operand bits: an 18-bit signed top slice, a 17-bit unsigned low one
+MUL_LAT = 4           # issue (operands muxed) -> operand regs -> partial products -> two adds
+
+
+def _deps(value):
+    return Value.cast(value)._rhs_signals()
+
+
+class Schedule:
+    def __init__(self, m, name, en, ii=None, mults=1, shift=None):
+        """``shift = (amount, left)``: products asked for ``shifted`` come out as
+        ``(a * b << left) >> amount`` (one shifter per multiplier that has such products;
+        ``amount`` must be steady over the job)."""
+        self.m, self.name, self.en, self.ii, self.shift = m, name, en, ii, shift
+        self.start = Signal(name=f"{name}_start")      # the caller drives it: a job starts
+        self.phase = [self.start]
+        self.ready = SignalDict()                        # register -> first offset it is valid
+        self.written = SignalDict()                      # register -> offset written
+        self.reads = SignalDict()                        # register -> last offset read
+        self.mults = [[] for _ in range(mults)]          # per multiplier: (offset, a, b)
+        self.length = 1                                  # offsets used
+        self.outputs = SignalSet()                       # read by the next stage, not here
+
+    def at(self, k):
+        """The phase bit of offset ``k``: high while the job that started ``k`` clocks ago is
+        at offset ``k``."""
+        while len(self.phase) <= k:
+            r = Signal(name=f"{self.name}_ph{len(self.phase)}")
+            with self.m.If(self.en):
+                self.m.d.sync += r.eq(self.phase[-1])
+            self.phase.append(r)
+        return self.phase[k]
+
+    def _when(self, *values, after=0):
+        k = after
+        for v in values:
+            for s in _deps(v):
+                k = max(k, self.ready.get(s, 0))
+        return k
+
+    def _read(self, k, *values):
+        for v in values:
+            for s in _deps(v):
+                if s in self.ready:
+                    self.reads[s] = max(self.reads.get(s, 0), k)
+
+    def _write(self, name, value, k, shape=None):
+        value = Value.cast(value)
+        reg = Signal(shape or value.shape(), name=f"{self.name}_{name}", reset_less=True)
+        with self.m.If(self.en & self.at(k)):
+            self.m.d.sync += reg.eq(value)
+        self.ready[reg], self.written[reg] = k + 1, k
+        self.length = max(self.length, k + 1)
+        return reg
+
+    def input(self, name, value, shape=None):
+        """``value`` (stable while ``start`` is high) captured at the job's start."""
+        return self._write(name, value, 0, shape)
+
+    def let(self, name, value, shape=None, after=0):
+        """A register of ``value``, written as soon as its operands are ready."""
+        k = self._when(value, after=after)
+        self._read(k, value)
+        return self._write(name, value, k, shape)
+
+    def apply(self, name, fn, *regs, after=0):
+        """``let(name, fn(*regs))``, each register read from a copy still valid then."""
+        k = self._when(*regs, after=after)
+        return self.let(name, fn(*(self.late(r, k) for r in regs)), after=k)
+
+    def lets(self, after=0, **values):
+        """Several registers written at one offset (the latest operand's)."""
+        k = self._when(*values.values(), after=after)
+        self._read(k, *values.values())
+        return {n: self._write(n, v, k) for n, v in values.items()}
+
+    def mul(self, name, a, b, post=None, shape=None, after=0, shifted=False):
+        """``post(a * b)`` in a register (``a``, ``b``: signed, at most OPERAND bits)."""
+        a, b = Value.cast(a), Value.cast(b)
+        natural = len(a) + len(b)
+        for x in (a, b):
+            if len(x) + (0 if x.shape().signed else 1) > OPERAND:
+                raise ValueError(f"{self.name}.{name}: operand of {len(x)} bits")
+        k = self._when(a, b, after=after)
+        while True:
+            for idx, unit in enumerate(self.mults):
+                used = [o for o, _, _ in unit]
+                if self.ii is None:
+                    free = k not in used
+                else:
+                    free = k % self.ii not in {o % self.ii for o in used}
+                if free:
+                    unit.append((k, a, b))
+                    break
+            else:
+                k += 1
+                if self.ii is not None and k > self.length + self.ii:
+                    raise ValueError(f"{self.name}: more products than {len(self.mults)} "
+                                     f"multipliers take every {self.ii} clocks")
+                continue
+            break
+        if self.ii is not None:
+            a, b = (self.late(x, k) if isinstance(x, Signal) else x for x in (a, b))
+            unit[-1] = (k, a, b)
+        self._read(k, a, b)
+        total, lat = self._total(idx), MUL_LAT
+        if shifted:
+            total, lat = self._shifted(idx), MUL_LAT + 1
+        self.length = max(self.length, k + lat + 1)
+        value = post(total) if post else total[:natural].as_signed()
+        return self._write(name, value, k + lat, shape)
+
+    def _shifted(self, idx):
+        if not hasattr(self, "_shifters"):
+            self._shifters = {}
+        if idx not in self._shifters:
+            amount, left = self.shift
+            total = self._total(idx)
+            reg = Signal(signed(len(total) + left), name=f"{self.name}_m{idx}_shifted",
+                         reset_less=True)
+            with self.m.If(self.en):
+                self.m.d.sync += reg.eq((total << left) >> amount)
+            self._shifters[idx] = reg
+        return self._shifters[idx]
+
+    def _total(self, idx):
+        if not hasattr(self, "_totals"):
+            self._totals = [Signal(signed(2 * OPERAND), name=f"{self.name}_m{n}_sum",
+                                   reset_less=True) for n in range(len(self.mults))]
+        return self._totals[idx]
+
+    def rom(self, name, lut, addr):
+        """``lut[addr]``: a synchronous read, then its own register (the RAM's clock to output
+        is never in series with logic)."""
+        k = self._when(addr)
+        self._read(k, addr)
+        mem = Memory(shape=unsigned(lut.fmt.width), depth=len(lut.contents),
+                     init=[int(v) & ((1 << lut.fmt.width) - 1) for v in lut.contents])
+        self.m.submodules[f"{self.name}_{name}_rom"] = mem
+        port = mem.read_port()
+        self.m.d.comb += [port.addr.eq(addr), port.en.eq(self.en & self.at(k))]
+        self.ready[port.data] = k + 1
+        data = port.data.as_signed() if lut.fmt.signed else port.data
+        return self.let(name, data)
+
+    def divide(self, name, num, den, q_bits):
+        """Unsigned restoring division, one quotient bit per clock: ``(q, r)`` registers with
+        ``num = q den + r``, ``0 <= r < den``, for ``num < den 2**q_bits`` (the caller's)."""
+        k = self._when(num, den)
+        self._read(k + q_bits, den)
+        num, den = Value.cast(num), Value.cast(den)
+        rem = Signal(len(den) + 1, name=f"{self.name}_{name}_rem", reset_less=True)
+        low = Signal(q_bits, name=f"{self.name}_{name}_low", reset_less=True)
+        q = Signal(q_bits, name=f"{self.name}_{name}_q", reset_less=True)
+        run = Signal(name=f"{self.name}_{name}_run")
+        for t in range(1, q_bits + 1):
+            run = run | self.at(k + t)
+        with self.m.If(self.en):
+            with self.m.If(self.at(k)):
+                self.m.d.sync += [rem.eq(num >> q_bits), low.eq(num[:q_bits]), q.eq(0)]
+            with self.m.Elif(run):
+                trial = Cat(low[-1], rem)                    # 2 rem + the next bit
+                ok = trial >= den
+                self.m.d.sync += [rem.eq(Mux(ok, trial - den, trial)), low.eq(low << 1),
+                                  q.eq(Cat(ok, q))]
+        done = k + q_bits
+        self.ready[q] = self.ready[rem] = done + 1
+        self.written[q] = self.written[rem] = done
+        self.length = max(self.length, done + 1)
+        return q, rem[:len(den)]
+
+    def late(self, reg, k):
+        """``reg``, or a copy of it that is still valid at offset ``k`` (with ``ii``)."""
+        if self.ii is None or reg not in self.written or k <= self.written[reg] + self.ii:
+            return reg
+        c = max(k - self.ii, self.ready[reg])
+        if not hasattr(self, "_late"):
+            self._late = SignalDict()
+        copies = self._late.setdefault(reg, {})
+        if c not in copies:
+            src = self.late(reg, c)
+            self._read(c, src)
+            copies[c] = self._write(f"{reg.name[len(self.name) + 1:]}_at{c}", src, c)
+        return copies[c]
+
+    @property
+    def aligned(self):
+        """With ``ii``: a job may start: ``ii`` clocks after the last start, or any time when
+        no job is in flight."""
+        if not hasattr(self, "_aligned"):
+            self._aligned = Signal(name=f"{self.name}_aligned")
+        return self._aligned
+
+    def _align(self):
+        count = Signal(range(self.ii), name=f"{self.name}_slot")
+        busy = Signal(name=f"{self.name}_busy")
+        self.m.d.comb += busy.eq(_or_tree([self.at(k) for k in range(1, self.length)]))
+        with self.m.If(self.en):
+            self.m.d.sync += count.eq(Mux(self.start, 1 % self.ii,
+                                          Mux(count == self.ii - 1, 0, count + 1)))
+        self.m.d.comb += self.aligned.eq((count == 0) | ~busy)
+
+    def finish(self):
+        if self.ii is not None:
+            self._align()
+        self._multipliers()
+
+    def _multipliers(self):
+        """The multipliers: each operand a one-hot AND-OR over its operations, registered;
+        four partial products registered; the middle two summed beside the outer two
+        (concatenated: they do not overlap), then one addition."""
+        for idx, unit in enumerate(self.mults):
+            if not unit:
+                continue
+            n = f"{self.name}_m{idx}"
+            ops = []
+            for j, (k, a, b) in enumerate(unit):
+                sa = Signal(signed(OPERAND), name=f"{n}_a{j}")
+                sb = Signal(signed(OPERAND), name=f"{n}_b{j}")
+                self.m.d.comb += [sa.eq(a), sb.eq(b)]
+                ops.append((self.at(k), sa, sb))
+            opa = _or_tree([Mux(sel, a, 0) for sel, a, _ in ops])
+            opb = _or_tree([Mux(sel, b, 0) for sel, _, b in ops])
+            ra = Signal(signed(OPERAND), name=f"{n}_a", reset_less=True)
+            rb = Signal(signed(OPERAND), name=f"{n}_b", reset_less=True)
+            lo = OPERAND - 18
+            xs = {"h": (ra[lo:].as_signed(), rb[lo:].as_signed()),
+                  "l": (ra[:lo], rb[:lo])}
+            part = {pa + pb: Signal(signed(36), name=f"{n}_{pa}{pb}", reset_less=True)
+                    for pa in "hl" for pb in "hl"}
+            mid = Signal(signed(38), name=f"{n}_mid", reset_less=True)
+            outer = Signal(signed(2 * OPERAND), name=f"{n}_outer", reset_less=True)
+            with self.m.If(self.en):
+                self.m.d.sync += [ra.eq(opa), rb.eq(opb)]
+                self.m.d.sync += [part[pa + pb].eq(xs[pa][0] * xs[pb][1])
+                                  for pa in "hl" for pb in "hl"]
+                self.m.d.sync += [mid.eq(part["hl"] + part["lh"]),
+                                  outer.eq(Cat(part["ll"][:2 * lo], part["hh"]))]
+                self.m.d.sync += self._total(idx).eq(outer + (mid << lo))
+
+    def check(self):
+        """With ``ii``: every register's last read comes before the next job's write."""
+        if self.ii is None:
+            return
+        for reg, w in self.written.items():
+            r = self.reads.get(reg, w)
+            if r > w + self.ii and reg not in self.outputs:
+                raise AssertionError(f"{reg.name}: written at {w}, read at {r}, ii {self.ii}")
+
+
+def _or_tree(terms):
+    while len(terms) > 1:
+        terms = [terms[i] | terms[i + 1] if i + 1 < len(terms) else terms[i]
+                 for i in range(0, len(terms), 2)]
+    return terms[0]
