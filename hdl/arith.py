@@ -1,8 +1,9 @@
-"""Pipelined arithmetic shared by the setup unit: normalisation, the reciprocal (Newton-Raphson
-from a table seed, or a restoring divider), the reciprocal square root, and floor division.
+"""Arithmetic shared by the units: sliced products, normalisation, the reciprocal and
+reciprocal square root seeds, and the pipelined reciprocal square root.
 
-Every function takes a :class:`hdl.unit.Pipeline` ``p`` and the dict ``v`` of values at the
-current stage, adds stages, and returns the dict at the last one (values ride along).
+The pipelined functions take a :class:`hdl.unit.Pipeline` ``p`` and the dict ``v`` of values
+at the current stage, add stages, and return the dict at the last one (values ride along).
+The setup's reciprocal runs on a schedule instead (``hdl/setup_unit/setup.py``).
 """
 import functools
 
@@ -12,8 +13,8 @@ from amaranth.hdl import Cat, Const, Mux, signed, unsigned
 from .fixed import u
 from .lut import build_lut, rom
 
-__all__ = ["products", "leading_one", "leading_zeros", "normalise", "recip_stages", "recip", "rsqrt_stages", "rsqrt",
-           "divide_stages", "floor_divide"]
+__all__ = ["products", "leading_one", "leading_zeros", "normalise", "recip_seed", "rsqrt_seed",
+           "rsqrt_stages", "rsqrt"]
 
 
 def products(p, v, jobs, port=18):
@@ -73,34 +74,6 @@ def rsqrt_seed(seed_bits, frac):
     return build_lut(lambda m: 1 / np.sqrt(m), seed_bits, u(frac + 1, frac), edges=edges)
 
 
-def recip_stages(method, iters, frac):
-    """Stages of :func:`recip`: the divider's quotient bits, or the seed (read, registered)
-    and two per step."""
-    return frac + 1 if method == "divide" else 2 + 2 * iters
-
-
-def recip(p, v, key, width, frac, method="newton", iters=2, seed_bits=8, out="r"):
-    """``v[out]`` ~ 2**frac / m for the mantissa ``m = v[key] / 2**(width-1)`` in [1, 2)
-    (so in (2**(frac-1), 2**frac]): by ``iters`` Newton-Raphson steps r' = r (2 - m r) from a
-    ``seed_bits`` table, or (``method="divide"``) by a restoring divider, ``frac + 1`` stages,
-    truncating. Relative error: the seed's, squared per step, floored by ``frac``'s rounding."""
-    if method == "divide":
-        v = {**v, "_num": Const(1 << (frac + width - 1), unsigned(frac + width + 1))}
-        v = _restoring(p, v, [("_num", key, frac + 1, out, None)])
-        v.pop("_num")
-        return v
-    lut = recip_seed(seed_bits, frac)
-    n = v[key]
-    v = p.stage(v, **{out: rom(lut, n[width - 1 - seed_bits:width - 1], "recip_seed")})
-    v = p.stage(v)                                                    # the table's output
-    for _ in range(iters):
-        n, r = v[key], v[out]
-        mr = (n * r) >> (width - 1)                                   # m r, frac bits
-        v = p.stage(v, _t=Const(2 << frac, unsigned(frac + 3)) - mr)  # 2 - m r
-        v = p.stage(v, **{out: ((v[out] * v.pop("_t")) >> frac)[:frac + 1]})
-    return v
-
-
 def rsqrt_stages(iters):
     return 2 + 5 * iters
 
@@ -125,55 +98,3 @@ def rsqrt(p, v, key, width, frac, iters=2, seed_bits=8, out="g"):
                            - (v.pop("_my") >> (width - 2)))[:frac + 2])
         v = p.stage(v, **{out: ((v[out] * v.pop("_t")) >> (frac + 1))[:frac + 1]})
     return v
-
-
-def _restoring(p, v, jobs):
-    """Unsigned restoring division, one quotient bit per stage, several divisions side by side.
-    jobs: (num_key, den_key, q_bits, q_out, r_out); num < den * 2**q_bits is the caller's."""
-    depth = max(j[2] for j in jobs)
-    v = dict(v)
-    for name, den, q_bits, q_out, r_out in jobs:
-        v[q_out] = Const(0, q_bits)
-        v["_rem_" + q_out] = v[name]
-    for t in range(depth):
-        new = {}
-        for name, den, q_bits, q_out, r_out in jobs:
-            bit = depth - 1 - t
-            if bit >= q_bits:
-                continue
-            rem = v["_rem_" + q_out]
-            trial = rem - (v[den] << bit)
-            ok = trial >= 0
-            new["_rem_" + q_out] = Mux(ok, trial, rem)[:len(rem)]
-            new[q_out] = v[q_out] | (ok << bit)
-        v = p.stage(v, **new)
-    for name, den, q_bits, q_out, r_out in jobs:
-        rem = v.pop("_rem_" + q_out)
-        if r_out:
-            v[r_out] = rem
-    return v
-
-
-def divide_stages(q_bits):
-    return q_bits + 2
-
-
-def floor_divide(p, v, jobs):
-    """Signed floor division side by side: jobs ``(num_key, den_key, q_bits, q_out, r_out)``
-    give ``q = floor(num / den)`` (signed, ``q_bits`` magnitude bits plus sign) and
-    ``r = num - q den`` in [0, den), for den > 0 and |q| < 2**q_bits.
-    Negative numerators go through M = -num - 1: q = -q(M) - 1, r = den - 1 - r(M)."""
-    pre = {}
-    for num, den, q_bits, q_out, r_out in jobs:
-        n = v[num]
-        pre["_neg_" + q_out] = n < 0
-        pre["_m_" + q_out] = Mux(n < 0, -n - 1, n).as_unsigned()[:len(n)]
-    v = p.stage(v, **pre)
-    v = _restoring(p, v, [("_m_" + q, d, qb, q, r) for _, d, qb, q, r in jobs])
-    post = {}
-    for num, den, q_bits, q_out, r_out in jobs:
-        v.pop("_m_" + q_out)
-        neg, q, r = v.pop("_neg_" + q_out), v.pop(q_out), v.pop(r_out)
-        post[q_out] = Mux(neg, -(q + 1), q + Const(0, signed(2)))
-        post[r_out] = Mux(neg, v[den] - 1 - r, r)[:len(v[den])]
-    return p.stage(v, **post)

@@ -1,7 +1,7 @@
 """What the setup's reciprocal costs in time and buys in accuracy: for each way of computing
-it (Newton-Raphson with 0-3 steps from a 256-entry seed, or the restoring divider), the setup
-latency in clocks, the largest relative error of 1/Omega's mantissa over every 16-bit mantissa
-(the same integer recurrences as the RTL, hdl/arith.py), and the largest fragment error the
+it (Newton-Raphson with 0-3 steps from a 256-entry seed, or the restoring divider), the setup's
+clocks per triangle (its schedule's length), the largest relative error of 1/Omega's mantissa over every 16-bit mantissa
+(the same integer recurrences as the RTL, hdl/setup_unit/setup.py), and the largest fragment error the
 RTL shows against the float model on the same triangles.
 
     make recip-cost   (python -m sim.recip_cost [--triangles N] [--screen-bits B] [--simulator S])
@@ -56,7 +56,7 @@ def main(argv=None):
         side = 1 << args.screen_bits
         print(f"raster on a {side} x {side} screen, {len(hard['x0'])} hard-case and "
               f"{args.triangles} random triangles, on {args.simulator}")
-        print("| reciprocal | setup latency (clocks) | relative error of 1/m | max fragment "
+        print("| reciprocal | setup clocks per triangle | relative error of 1/m | max fragment "
               "error (LSB) | fragments | sim time (s) |")
         print("| --- | --- | --- | --- | --- | --- |")
         for method, iters in CONFIGS:
@@ -70,7 +70,7 @@ def main(argv=None):
             else:
                 err = max(float(np.abs(out[k] - want[k]).max()) for k in want
                           if k.startswith("v"))
-            print(f"| {label} | {unit.setup.latency} | {recip_error(method, iters):.2e} | "
+            print(f"| {label} | {unit.timing[0]} | {recip_error(method, iters):.2e} | "
                   f"{err:.2f} | {len(out['tri']):,} | {time.time() - t0:.0f} |", flush=True)
 
 
