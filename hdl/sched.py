@@ -220,7 +220,7 @@ class Schedule:
         with self.m.If(self.en):
             self.m.d.sync += count.eq(Mux(self.start, 1 % self.ii,
                                           Mux(count == self.ii - 1, 0, count + 1)))
-        self.m.d.comb += self.aligned.eq((count == 0) | ~busy)
+        self.m.d.comb += self.aligned.eq(~count.any() | ~busy)          # no "x == 0": lint
 
     def finish(self):
         if self.ii is not None:

@@ -188,7 +188,8 @@ class Setup:
         g = self._exact_mid_edges(sc, v) if "exact" in self.modes else {}
         for ch, mode in enumerate(self.modes):
             coef = self._channel(sc, v, g, ch, mode)
-            out.update({f"c{ch}_{k}": val for k, val in self._span(sc, coef, alpha, ch).items()})
+            span = self._span(sc, coef, alpha, ch, mode == "linear")
+            out.update({f"c{ch}_{k}": val for k, val in span.items()})
         return out
 
     def shift(self, sh):
@@ -276,7 +277,7 @@ class Setup:
             m = pre[f"{e}_x"]
             k = 7
             addr = Cat(Mux(m[Wm - 1], m[Wm - 1 - k:Wm - 1], m[Wm - 2 - k:Wm - 2]), m[Wm - 1])
-            y = sc.rom(f"{e}_seed", lut, addr)
+            y = sc.rom(f"rsqrt_seed_{e}", lut, addr)
             for it in range(RSQRT_ITERS):
                 y2 = sc.mul(f"{e}_yy{it}", y, y, post=lambda p: (p >> FG)[:FG + 1])
                 my = sc.mul(f"{e}_my{it}", y2, m, post=lambda p: p >> (Wm - 2))
@@ -317,17 +318,23 @@ class Setup:
         return {"a": a, "b": b, "c": 4 * (L + I23 - I13 - I12), "d": M - L - a, "e": N - L - b,
                 "f": L}
 
-    def _span(self, sc, coef, alpha, ch):
+    def _span(self, sc, coef, alpha, ch, linear):
         """The row engine's constants of one channel: a..f as operands, and the first
         difference along x at a span's start, d = Pu u + Pv v + P0, with Pu = 2 a au + c av,
         Pv = 2 b av + c au, P0 = d au + e av + A, and 2A = 2 (au (a au + c av) + av (b av))
-        (eq 22)."""
+        (eq 22). A linear channel (a = b = c = 0) needs only P0 = d au + e av."""
         w, n = self.w, f"c{ch}"
         op = lambda x: x.as_signed()[:OPERAND].as_signed()
         c = sc.lets(**{f"{n}_{k}": op(val >> (w.FC - w.FO)) for k, val in coef.items()})
         a, b, cc, d, e = (c[f"{n}_{k}"] for k in "abcde")
         au, av = alpha["au"], alpha["av"]
         FP = w.FO + w.FA                                     # fraction bits of a product
+        if linear:
+            zero = Const(0, 1)
+            p0 = sc.let(f"{n}_p0", (sc.mul(f"{n}_dau", d, au) + sc.mul(f"{n}_eav", e, av))
+                        >> (FP - w.FI))
+            return {**{k: c[f"{n}_{k}"] for k in "abcdef"}, "pu": zero, "pv": zero, "p0": p0,
+                    "a2": zero}
         aau, cav, bav = (sc.mul(f"{n}_{k}", x, y) for k, x, y in
                          (("aau", a, au), ("cav", cc, av), ("bav", b, av)))
         cau, dau, eav = (sc.mul(f"{n}_{k}", x, y) for k, x, y in
