@@ -14,7 +14,7 @@ products of two 35-bit signed operands registered (one MULT18X18D each), their s
 the middle two summed, then added to the outer two (which do not overlap), each registered;
 the result is written at ``issue + MUL_LAT`` and readable one clock later.
 """
-from amaranth.hdl import Cat, Mux, Signal, Value, signed, unsigned
+from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
 from amaranth.hdl._ast import SignalDict, SignalSet   # Signals are not hashable
 from amaranth.lib.memory import Memory
 
@@ -31,8 +31,8 @@ def _deps(value):
 class Schedule:
     def __init__(self, m, name, en, ii=None, mults=1, shift=None):
         """``shift = (amount, left)``: products asked for ``shifted`` come out as
-        ``(a * b << left) >> amount`` (one shifter per multiplier that has such products;
-        ``amount`` must be steady over the job)."""
+        ``(a * b << left) >> amount``, two clocks later (one two-stage shifter per multiplier
+        that has such products; ``amount`` must be steady over the job)."""
         self.m, self.name, self.en, self.ii, self.shift = m, name, en, ii, shift
         self.start = Signal(name=f"{name}_start")      # the caller drives it: a job starts
         self.phase = [self.start]
@@ -127,7 +127,7 @@ class Schedule:
         self._read(k, a, b)
         total, lat = self._total(idx), MUL_LAT
         if shifted:
-            total, lat = self._shifted(idx), MUL_LAT + 1
+            total, lat = self._shifted(idx), MUL_LAT + 2
         self.length = max(self.length, k + lat + 1)
         value = post(total) if post else total[:natural].as_signed()
         return self._write(name, value, k + lat, shape)
@@ -138,10 +138,13 @@ class Schedule:
         if idx not in self._shifters:
             amount, left = self.shift
             total = self._total(idx)
+            coarse = Signal(signed(len(total) + left), name=f"{self.name}_m{idx}_coarse",
+                            reset_less=True)
             reg = Signal(signed(len(total) + left), name=f"{self.name}_m{idx}_shifted",
                          reset_less=True)
-            with self.m.If(self.en):
-                self.m.d.sync += reg.eq((total << left) >> amount)
+            with self.m.If(self.en):            # two stages: by amount's high bits, then low
+                self.m.d.sync += [coarse.eq((total << left) >> Cat(Const(0, 3), amount[3:])),
+                                  reg.eq(coarse >> amount[:3])]
             self._shifters[idx] = reg
         return self._shifters[idx]
 

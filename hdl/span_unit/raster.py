@@ -17,7 +17,7 @@ from ..sched import Schedule
 from ..setup_unit.formats import MODES, fragment_fields, parse_modes, triangle_fields
 from ..setup_unit.setup import Setup
 from ..unit import Unit
-from .span import Link, row_engine, stepper, walker
+from .span import Link, row_engine, row_queue, stepper, walker
 
 __all__ = ["Raster"]
 
@@ -60,9 +60,10 @@ class Raster(Unit):
     @property
     def latency(self):
         """From a triangle in to its first fragment out, when nothing waits: the setup, the
-        walker's load, the row engine, the stepper's load."""
+        walker's load, the row engine, the row queue, the stepper's load, the output
+        register."""
         setup_clocks, _, row_clocks = self.timing
-        return setup_clocks + 1 + row_clocks + 1
+        return setup_clocks + 1 + row_clocks + 3
 
     def elaborate(self, platform):
         m = Module()
@@ -93,8 +94,9 @@ class Raster(Unit):
         culled = Signal(32)
         rows = walker(m, w, ch, coef, done, src_ready, rows_in, culled)
         rows, re = row_engine(m, w, ch, rows, rows_in, rows_out)
-        cur = stepper(m, w, ch, rows, rows_out, self.o)
-        busy = cur | rows_in.valid | rows_out.valid | running | done
+        rows, queued, take = row_queue(m, rows, rows_out.valid, rows_out.ready)
+        cur = stepper(m, w, ch, rows, queued, take, self.o)
+        busy = cur | self.o.valid | rows_in.valid | rows_out.valid | queued | running | done
         for k in range(1, re.length):
             busy = busy | re.at(k)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]

@@ -17,12 +17,13 @@ Three parts, each a stream stage with backpressure:
 - ``stepper``: one fragment per clock, two additions per quadratic channel per pixel:
   Phi += d, d += 2A (one for a linear channel, whose 2A is 0).
 """
-from amaranth.hdl import Mux, Signal
+from amaranth.hdl import Cat, Mux, Signal
+from amaranth.lib.fifo import SyncFIFO
 
 from ..sched import OPERAND, Schedule
 from ..setup_unit.formats import VALUE
 
-__all__ = ["Link", "walker", "row_engine", "stepper"]
+__all__ = ["Link", "walker", "row_engine", "row_queue", "stepper"]
 
 
 class Link:
@@ -58,7 +59,7 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
           ("E_u", "E_v", "B_u", "B_v", "s0_u", "s0_v", "s1_u", "s1_v", "e1_u", "e1_v",
            "t0_u", "t0_v", "t1_u", "t1_v", "bs_u", "bs_v")}
     accept = have & out_link.ready
-    last = j + 1 == j1
+    last, at_jm = Signal(), Signal()           # j + 1 == j1, j + 1 == jm (registered)
     load = src_valid & (~have | (accept & last))
     m.d.comb += [src_ready.eq(~have | (accept & last)), out_link.valid.eq(have)]
 
@@ -69,7 +70,8 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
     with m.If(load):
         rows = ~src["cull"] & (src["j0"] < src["j1"])
         m.d.sync += [have.eq(rows), j.eq(src["j0"]), j1.eq(src["j1"]), jm.eq(src["jm"]),
-                     left_long.eq(src["left_long"])]
+                     left_long.eq(src["left_long"]), last.eq(src["j0"] + 1 == src["j1"]),
+                     at_jm.eq(src["j0"] + 1 == src["jm"])]
         m.d.sync += [held[k].eq(src[k]) for k in keep]
         first_short = Mux(src["j0"] >= src["jm"], 1, 0)
         for e in ("l", "t"):
@@ -81,15 +83,15 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
         with m.If(src["cull"]):
             m.d.sync += culled.eq(culled + 1)
     with m.Elif(accept):
-        m.d.sync += j.eq(j + 1)
+        m.d.sync += [j.eq(j + 1), last.eq(j + 2 == j1), at_jm.eq(j + 2 == jm)]
         with m.If(last):
             m.d.sync += have.eq(0)
         li, lr = _step(*(edge["l"][k] for k in "irqdn"))
         m.d.sync += [edge["l"]["i"].eq(li), edge["l"]["r"].eq(lr)]
         si, sr = _step(*(edge["s"][k] for k in "irqdn"))
         carry = Mux(left_long, edge["l"]["r"] < edge["l"]["d"], edge["s"]["r"] < edge["s"]["d"])
-        switch = ~left_long & (j + 1 == jm)
-        with m.If(j + 1 == jm):
+        switch = ~left_long & at_jm
+        with m.If(at_jm):
             m.d.sync += [edge["s"][k].eq(edge["t"][k]) for k in "irqdn"]
         with m.Else():
             m.d.sync += [edge["s"]["i"].eq(si), edge["s"]["r"].eq(sr)]
@@ -160,34 +162,56 @@ def row_engine(m, w, channels, rows, row_link, out_link):
     return out, sc
 
 
-def stepper(m, w, channels, rows, row_link, o):
-    """One fragment per clock from the rows: Phi += d, d += 2A per pixel and channel."""
+def row_queue(m, rows, valid, ready):
+    """A four-row queue (distributed RAM) between the row engine and the stepper: both sides'
+    handshakes come from registers, so no combinational path runs from the fragment stream's
+    ready back into the row engine and the walker. Returns ``(rows, valid, take)``."""
+    names = list(rows)
+    width = sum(len(rows[k]) for k in names)
+    fifo = SyncFIFO(width=width, depth=4)
+    m.submodules.row_queue = fifo
+    m.d.comb += [fifo.w_data.eq(Cat(*(rows[k] for k in names))), fifo.w_en.eq(valid),
+                 ready.eq(fifo.w_rdy)]
+    out, at = {}, 0
+    for k in names:
+        n = len(rows[k])
+        out[k] = fifo.r_data[at:at + n]
+        out[k] = out[k].as_signed() if rows[k].shape().signed else out[k]
+        at += n
+    return out, fifo.r_rdy, fifo.r_en
+
+
+def stepper(m, w, channels, rows, rows_valid, rows_take, o):
+    """One fragment per clock from the rows: Phi += d, d += 2A per pixel and channel; the
+    fragment registered (rounded and saturated) on its way out."""
     acc_bits = w.FI + 16                       # Phi and d wrap modulo 2**acc_bits: only
-    cur = Signal()                              # emitted values must fit, and they do
+    cur, last = Signal(), Signal()              # emitted values must fit, and they do
     x, xe, y = Signal(w.screen_bits + 1), Signal(w.screen_bits + 1), Signal(w.screen_bits)
     tri = Signal.like(rows["tri"], name="st_tri")
     phi = [Signal(acc_bits, name=f"st_phi{ch}") for ch in range(channels)]
     d = [Signal(acc_bits, name=f"st_d{ch}") for ch in range(channels)]
     a2 = [Signal(acc_bits, name=f"st_a2_{ch}") for ch in range(channels)]
-    last = x + 1 == xe
-    take = ~cur | (o.ready & last)
-    m.d.comb += [row_link.ready.eq(take), o.valid.eq(cur)]
-    with m.If(take & row_link.valid):
-        m.d.sync += [cur.eq(rows["xs"] < rows["xe"]), x.eq(rows["xs"]), xe.eq(rows["xe"]),
-                     y.eq(rows["j"]), tri.eq(rows["tri"])]
-        for ch in range(channels):
-            m.d.sync += [phi[ch].eq(rows[f"phi{ch}"]), d[ch].eq(rows[f"d{ch}"]),
-                         a2[ch].eq(rows[f"c{ch}_a2"])]
-    with m.Elif(cur & o.ready):
+    shift = w.FI - VALUE.frac_bits
+    en = ~o.valid | o.ready                     # the output register is free
+    take = ~cur | (en & last)
+    m.d.comb += rows_take.eq(take & rows_valid)
+    with m.If(take & rows_valid):
+        m.d.sync += [cur.eq(rows["xs"] < rows["xe"]), last.eq(rows["xs"] + 1 == rows["xe"]),
+                     x.eq(rows["xs"]), xe.eq(rows["xe"]), y.eq(rows["j"]), tri.eq(rows["tri"])]
+        for ch in range(channels):             # Phi carries the output's rounding half
+            m.d.sync += [phi[ch].eq(rows[f"phi{ch}"] + (1 << (shift - 1))),
+                         d[ch].eq(rows[f"d{ch}"]), a2[ch].eq(rows[f"c{ch}_a2"])]
+    with m.Elif(cur & en):
         with m.If(last):
             m.d.sync += cur.eq(0)
-        m.d.sync += x.eq(x + 1)
+        m.d.sync += [x.eq(x + 1), last.eq(x + 2 == xe)]
         for ch in range(channels):
             m.d.sync += [phi[ch].eq(phi[ch] + d[ch]), d[ch].eq(d[ch] + a2[ch])]
-    shift = w.FI - VALUE.frac_bits
-    m.d.comb += [o.payload["tri"].eq(tri), o.payload["x"].eq(x), o.payload["y"].eq(y)]
-    for ch in range(channels):
-        val = (phi[ch].as_signed() + (1 << (shift - 1))) >> shift
-        m.d.comb += o.payload[f"v{ch}"].eq(Mux(val > VALUE.max, VALUE.max,
-                                               Mux(val < VALUE.min, VALUE.min, val)))
+    with m.If(en):
+        m.d.sync += [o.valid.eq(cur), o.payload["tri"].eq(tri), o.payload["x"].eq(x),
+                     o.payload["y"].eq(y)]
+        for ch in range(channels):
+            val = phi[ch].as_signed() >> shift
+            m.d.sync += o.payload[f"v{ch}"].eq(Mux(val > VALUE.max, VALUE.max,
+                                                   Mux(val < VALUE.min, VALUE.min, val)))
     return cur
