@@ -114,7 +114,7 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
     ({"modes": "phong"}, "modes must be one of 'xshading', 'exact', 'linear' (one per channel), "
                          "not 'phong'"),
     ({"recip": "magic"}, "recip must be one of 'newton', 'divide', not 'magic'"),
-    ({"screen_bits": 13}, "screen_bits must be in 4..12"),
+    ({"screen_bits": 11}, "screen_bits must be in 4..10"),      # docs/quadratic.md: widths
 ])
 def test_bad_parameters_are_named(params, message):
     with pytest.raises(ParamError, match=message.replace("(", r"\(").replace(")", r"\)")):

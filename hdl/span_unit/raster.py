@@ -10,7 +10,7 @@ dropped).
 """
 import functools
 
-from amaranth.hdl import Const, Module, Signal
+from amaranth.hdl import Const, Fragment, Module, Signal
 from amaranth.lib.wiring import Out
 
 from ..sched import Schedule
@@ -28,7 +28,7 @@ class Raster(Unit):
            "forward-difference span engine; many fragments per triangle")
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
               "recip": "newton", "recip_iters": 2}
-    RANGES = {"screen_bits": (4, 12), "sub_bits": (1, 8), "channels": (1, 8), "modes": MODES,
+    RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 8), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3)}
     PER_CHANNEL = ("modes",)
     status_ports = {"busy": Out(1), "culled": Out(32)}
@@ -107,5 +107,6 @@ class Raster(Unit):
 @functools.lru_cache(maxsize=None)
 def _timing(items):
     unit = Raster(**dict(items))
-    unit.elaborate(None)
+    Fragment.get(unit, None)                     # elaborated whole: nothing left unused
+    unit._MustUse__used = True                   # (Amaranth's own flag) the top, too
     return unit._timing
