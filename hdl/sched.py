@@ -217,13 +217,15 @@ class Schedule:
         return self._aligned
 
     def _align(self):
+        """``aligned`` from two registers: the slot count and ``idle`` (no job in flight next
+        clock), so that nothing wide lies between the phase bits and a start."""
         count = Signal(range(self.ii), name=f"{self.name}_slot")
-        busy = Signal(name=f"{self.name}_busy")
-        self.m.d.comb += busy.eq(_or_tree([self.at(k) for k in range(1, self.length)]))
+        idle = Signal(name=f"{self.name}_idle", init=1)
         with self.m.If(self.en):
-            self.m.d.sync += count.eq(Mux(self.start, 1 % self.ii,
-                                          Mux(count == self.ii - 1, 0, count + 1)))
-        self.m.d.comb += self.aligned.eq(~count.any() | ~busy)          # no "x == 0": lint
+            self.m.d.sync += [
+                count.eq(Mux(self.start, 1 % self.ii, Mux(count == self.ii - 1, 0, count + 1))),
+                idle.eq(~_or_tree([self.start] + [self.at(k) for k in range(1, self.length - 1)]))]
+        self.m.d.comb += self.aligned.eq(~count.any() | idle)          # no "x == 0": lint
 
     def finish(self):
         if self.ii is not None:

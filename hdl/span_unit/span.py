@@ -184,8 +184,8 @@ def row_queue(m, rows, valid, ready):
 def stepper(m, w, channels, rows, rows_valid, rows_take, o):
     """One fragment per clock from the rows: Phi += d, d += 2A per pixel and channel; the
     fragment registered (rounded and saturated) on its way out."""
-    acc_bits = w.FI + 16                       # Phi and d wrap modulo 2**acc_bits: only
-    cur, last = Signal(), Signal()              # emitted values must fit, and they do
+    acc_bits = w.FI + 9                        # Phi and d wrap modulo 2**acc_bits: only
+    cur, last = Signal(), Signal()              # emitted values must fit: |Phi| < 128
     x, xe, y = Signal(w.screen_bits + 1), Signal(w.screen_bits + 1), Signal(w.screen_bits)
     tri = Signal.like(rows["tri"], name="st_tri")
     phi = [Signal(acc_bits, name=f"st_phi{ch}") for ch in range(channels)]
