@@ -105,15 +105,18 @@ class Setup:
         self.modes = parse_modes(modes, channels)
         self.recip, self.recip_iters = recip, recip_iters
 
-    def sort(self, v):
-        """Ranks by (y, x, index) -> vertices top/mid/bottom, edges and values in sorted labels."""
+    def sort(self, sc, v):
+        """Ranks by (y, x, index) (registered) -> vertices top/mid/bottom, edges and values in
+        sorted labels."""
         x = [v.pop(f"x{k}") for k in range(3)]
         y = [v.pop(f"y{k}") for k in range(3)]
 
         def lt(a, b):     # vertex a before vertex b
             later = (x[a] < x[b]) if a > b else (x[a] <= x[b])
             return (y[a] < y[b]) | ((y[a] == y[b]) & later)
-        rank = [sum((lt(o, k) for o in range(3) if o != k), Const(0, 2)) for k in range(3)]
+        before = sc.lets(**{f"lt{a}{b}": lt(a, b) for a in range(3) for b in range(3) if a != b})
+        rank = [sum((before[f"lt{o}{k}"] for o in range(3) if o != k), Const(0, 2))
+                for k in range(3)]
 
         def pick(slot, vals):
             out = vals[2]
@@ -141,12 +144,14 @@ class Setup:
         w, S = self.w, 1 << self.w.sub_bits
         size = 1 << w.screen_bits
         tri = v["tri"]
-        v = sc.lets(**self.sort(dict(v)))                                           # sort
+        v = sc.lets(**self.sort(sc, dict(v)))                                       # sort
         xt, yt = v["x0"], v["y0"]
         clamp = lambda j: Mux(j < 0, 0, Mux(j > size, size, j))
-        j0, jm, j1 = (clamp(self.rows(v[f"y{k}"])) for k in range(3))
+        j = sc.lets(**{f"_j{k}": self.rows(v[f"y{k}"]) for k in range(3)})
+        j = sc.lets(**{f"j{k}": clamp(j[f"_j{k}"]) for k in range(3)})
         r = sc.lets(x1=v["x1"] - xt, y1=v["y1"] - yt, x2=v["x2"] - xt, y2=v["y2"] - yt,
-                    j0=j0, jm=Mux(jm < j0, j0, Mux(jm > j1, j1, jm)), j1=j1)
+                    j0=j["j0"], jm=Mux(j["j1"] < j["j0"], j["j0"],
+                                       Mux(j["j1"] > j["j2"], j["j2"], j["j1"])), j1=j["j2"])
         x1, y1, x2, y2 = r["x1"], r["y1"], r["x2"], r["y2"]
         out = {"tri": tri, "xt": xt, "yt": yt, "j0": r["j0"], "jm": r["jm"], "j1": r["j1"]}
         om = sc.let("omega", sc.mul("x1y2", x1, y2) - sc.mul("x2y1", x2, y1))
@@ -159,16 +164,17 @@ class Setup:
             d = sc.lets(**{f"{e}_dx": v[qx] - v[px], f"{e}_dy": v[qy] - v[py]})
             dx, dy = d[f"{e}_dx"], d[f"{e}_dy"]
             den = sc.let(f"{e}_n", Mux(dy.any(), 2 * S * dy, 1)[:w.wden])
-            num = sc.let(f"{e}_num", sc.mul(f"{e}_ndy", 2 * v[px] - S, dy)
-                         + sc.mul(f"{e}_ndx", 2 * S * r[j] + S - 2 * v[py], dx) + den - 1)
+            fac = sc.lets(**{f"{e}_fx": 2 * v[px] - S, f"{e}_fy": 2 * S * r[j] + S - 2 * v[py]})
+            num = sc.let(f"{e}_num", sc.mul(f"{e}_ndy", fac[f"{e}_fx"], dy)
+                         + sc.mul(f"{e}_ndx", fac[f"{e}_fy"], dx) + den - 1)
             div_jobs += [(e, "i", num, den, w.wi - 1), (e, "q", 2 * S * dx, den, w.qstep)]
             out[f"{e}_n"] = den
         # orientation, cull, |Omega| normalised: n in [2**(W-1), 2**W) and sh
         W = w.womega
         flags = sc.lets(cull=~om.any(), neg=om < 0, left_long=om > 0, mag=abs(om)[:W])
         out.update(cull=flags["cull"], left_long=flags["left_long"])
-        norm = sc.lets(sh=arith.leading_one(flags["mag"], W),
-                       lz=arith.leading_zeros(flags["mag"], W))
+        norm = sc.lets(sh=arith.leading_one(flags["mag"], W))
+        norm["lz"] = sc.let("lz", W - 1 - norm["sh"], shape=range(W))
         sh = norm["sh"]
         sc.shift = self.shift(sh)
         n = sc.let("n", (flags["mag"] << norm["lz"])[:W])
@@ -298,21 +304,22 @@ class Setup:
             z = Const(0, 1)
             return {"a": z, "b": z, "c": z, "d": (I2 - I1) << up, "e": (I3 - I1) << up,
                     "f": I1 << up}
+        sums = sc.lets(**{f"{n}_s12": I1 + I2, f"{n}_s13": I1 + I3, f"{n}_s23": I2 + I3})
         if mode == "xshading":                                        # seed 001 eq 32
-            a = sc.mul(f"{n}_a", I1 + I2, v["e12"])
-            b = sc.mul(f"{n}_b", I1 + I3, v["e13"])
-            c = a + b - sc.mul(f"{n}_c3", I2 + I3, v["e23"])
+            a = sc.mul(f"{n}_a", sums[f"{n}_s12"], v["e12"])
+            b = sc.mul(f"{n}_b", sums[f"{n}_s13"], v["e13"])
+            c = a + b - sc.mul(f"{n}_c3", sums[f"{n}_s23"], v["e23"])
             return {"a": a, "b": b, "c": c, "d": ((I2 - I1) << up) - a,
                     "e": ((I3 - I1) << up) - b, "f": I1 << up}
         lo, hi = VALUE.min << up, VALUE.max << up                       # exact: eq 4-6, 16
         shift = VALUE.frac_bits + G_FRAC - 3 - w.FC
 
-        def mid(name, Ia, Ib, gk):
-            m = sc.mul(f"{n}_{name}", Ia + Ib, g[gk],
+        def mid(name, s, gk):
+            m = sc.mul(f"{n}_{name}", sums[f"{n}_{s}"], g[gk],
                        post=lambda p: (p + (1 << (shift - 1))) >> shift)
             return _saturate(m, lo, hi)
-        I12, I13, I23 = mid("m12", I1, I2, "g12"), mid("m13", I1, I3, "g13"), \
-            mid("m23", I2, I3, "g23")
+        I12, I13, I23 = mid("m12", "s12", "g12"), mid("m13", "s13", "g13"), \
+            mid("m23", "s23", "g23")
         L, M, N = I1 << up, I2 << up, I3 << up
         a, b = 2 * (L + M - 2 * I12), 2 * (L + N - 2 * I13)
         return {"a": a, "b": b, "c": 4 * (L + I23 - I13 - I12), "d": M - L - a, "e": N - L - b,
@@ -344,6 +351,7 @@ class Setup:
                        f"{n}_pv": op((2 * bav + cau) >> w.FA)})
         a2 = sc.let(f"{n}_a2", (sc.mul(f"{n}_ut", au, t[f"{n}_t"])
                                 + sc.mul(f"{n}_vb", av, t[f"{n}_bv"])) >> (FP - w.FI - 1))
-        p0 = sc.let(f"{n}_p0", ((dau + eav) >> (FP - w.FI)) + (a2 >> 1))
+        de = sc.let(f"{n}_de", (dau + eav) >> (FP - w.FI))
+        p0 = sc.let(f"{n}_p0", de + (a2 >> 1))
         return {**{k: c[f"{n}_{k}"] for k in "abcdef"}, "pu": t[f"{n}_pu"],
                 "pv": t[f"{n}_pv"], "p0": p0, "a2": a2}

@@ -137,16 +137,17 @@ def row_engine(m, w, channels, rows, row_link, out_link):
         au, cv, bv = sc.mul(f"au{ch}", c["a"], u), sc.mul(f"cv{ch}", c["c"], vv), \
             sc.mul(f"bv{ch}", c["b"], vv)
         pu, pv = sc.mul(f"pu{ch}", c["pu"], u), sc.mul(f"pv{ch}", c["pv"], vv)
-        t1 = sc.apply(f"t1_{ch}", lambda d, x, y: fq(((d << w.FQ) + x + y) >> (FP - w.FT)),
-                      c["d"], au, cv)
+        acv = sc.let(f"acv{ch}", au + cv)
+        t1 = sc.apply(f"t1_{ch}", lambda d, x: fq(((d << w.FQ) + x) >> (FP - w.FT)), c["d"], acv)
         t2 = sc.apply(f"t2_{ch}", lambda e, x: fq(((e << w.FQ) + x) >> (FP - w.FT)), c["e"], bv)
         ut, vt = sc.mul(f"ut{ch}", u, t1), sc.mul(f"vt{ch}", vv, t2)
         shift = w.FQ + w.FT - w.FI
-        k = sc._when(ut, vt, pu, pv)
-        out[f"phi{ch}"] = sc.apply(f"phi{ch}", lambda f, x, y: (f << (w.FI - w.FO))
-                                   + ((x + y) >> shift), c["f"], ut, vt, after=k)
-        out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0, x, y: p0 + ((x + y) >> (FP - w.FI)),
-                                 c["p0"], pu, pv, after=k)
+        uvt = sc.let(f"uvt{ch}", (ut + vt) >> shift)
+        puv = sc.let(f"puv{ch}", (pu + pv) >> (FP - w.FI))
+        k = sc._when(uvt, puv)
+        out[f"phi{ch}"] = sc.apply(f"phi{ch}", lambda f, x: (f << (w.FI - w.FO)) + x,
+                                   c["f"], uvt, after=k)
+        out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0, x: p0 + x, c["p0"], puv, after=k)
         out[f"c{ch}_a2"] = c["a2"]
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
     for k in ("j", "xs", "xe", "tri"):
