@@ -12,7 +12,8 @@ Everything advances with one enable, so a stalled schedule holds every value.
 A product: operands are registered (the DSP's input registers), the four 18 x 18 partial
 products of two 35-bit signed operands registered (one MULT18X18D each), their sum registered;
 the middle two summed, then added to the outer two (which do not overlap), each registered;
-the result is written at ``issue + MUL_LAT`` and readable one clock later.
+the result is written at ``issue + MUL_LAT`` (one more with ``mux_groups``) and readable one
+clock later.
 """
 from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
 from amaranth.hdl._ast import SignalDict, SignalSet   # Signals are not hashable
@@ -29,11 +30,14 @@ def _deps(value):
 
 
 class Schedule:
-    def __init__(self, m, name, en, ii=None, mults=1, shift=None):
+    def __init__(self, m, name, en, ii=None, mults=1, shift=None, mux_groups=None):
         """``shift = (amount, left)``: products asked for ``shifted`` come out as
         ``(a * b << left) >> amount``, two clocks later (one two-stage shifter per multiplier
         that has such products; ``amount`` must be steady over the job)."""
         self.m, self.name, self.en, self.ii, self.shift = m, name, en, ii, shift
+        # with many operations per multiplier: the operand multiplexer in two registered
+        # levels (groups of ``mux_groups`` operations, then the groups), one clock more
+        self.mux_groups, self.lat = mux_groups, MUL_LAT + (1 if mux_groups else 0)
         self.start = Signal(name=f"{name}_start")      # the caller drives it: a job starts
         self.phase = [self.start]
         self.ready = SignalDict()                        # register -> first offset it is valid
@@ -125,9 +129,10 @@ class Schedule:
             a, b = (self.late(x, k) if isinstance(x, Signal) else x for x in (a, b))
             unit[-1] = (k, a, b)
         self._read(k, a, b)
-        total, lat = self._total(idx), MUL_LAT
-        if shifted:
-            total, lat = self._shifted(idx), MUL_LAT + 2
+        total, lat = self._total(idx), self.lat
+        if shifted:                       # the amount is read with the product's sum
+            total, lat = self._shifted(idx), self.lat + 2
+            self._read(k + self.lat, self.shift[0])
         self.length = max(self.length, k + lat + 1)
         value = post(total) if post else total[:natural].as_signed()
         return self._write(name, value, k + lat, shape)
@@ -142,9 +147,10 @@ class Schedule:
                             reset_less=True)
             reg = Signal(signed(len(total) + left), name=f"{self.name}_m{idx}_shifted",
                          reset_less=True)
+            low = Signal(3, name=f"{self.name}_m{idx}_low", reset_less=True)
             with self.m.If(self.en):            # two stages: by amount's high bits, then low
                 self.m.d.sync += [coarse.eq((total << left) >> Cat(Const(0, 3), amount[3:])),
-                                  reg.eq(coarse >> amount[:3])]
+                                  low.eq(amount[:3]), reg.eq(coarse >> low)]
             self._shifters[idx] = reg
         return self._shifters[idx]
 
@@ -246,8 +252,12 @@ class Schedule:
                 sb = Signal(signed(OPERAND), name=f"{n}_b{j}")
                 self.m.d.comb += [sa.eq(a), sb.eq(b)]
                 ops.append((self.at(k), sa, sb))
-            opa = _or_tree([Mux(sel, a, 0) for sel, a, _ in ops])
-            opb = _or_tree([Mux(sel, b, 0) for sel, _, b in ops])
+            opa = [Mux(sel, a, 0) for sel, a, _ in ops]
+            opb = [Mux(sel, b, 0) for sel, _, b in ops]
+            if self.mux_groups:
+                opa, opb = (self._grouped(f"{n}_{x}", terms) for x, terms in (("a", opa),
+                                                                          ("b", opb)))
+            opa, opb = _or_tree(opa), _or_tree(opb)
             ra = Signal(signed(OPERAND), name=f"{n}_a", reset_less=True)
             rb = Signal(signed(OPERAND), name=f"{n}_b", reset_less=True)
             lo = OPERAND - 18
@@ -264,6 +274,16 @@ class Schedule:
                 self.m.d.sync += [mid.eq(part["hl"] + part["lh"]),
                                   outer.eq(Cat(part["ll"][:2 * lo], part["hh"]))]
                 self.m.d.sync += self._total(idx).eq(outer + (mid << lo))
+
+    def _grouped(self, name, terms):
+        """The first level of a two-level operand multiplexer: each group's OR registered."""
+        out = []
+        for g, at in enumerate(range(0, len(terms), self.mux_groups)):
+            reg = Signal(signed(OPERAND), name=f"{name}_g{g}", reset_less=True)
+            with self.m.If(self.en):
+                self.m.d.sync += reg.eq(_or_tree(terms[at:at + self.mux_groups]))
+            out.append(reg)
+        return out
 
     def check(self):
         """With ``ii``: every register's last read comes before the next job's write."""

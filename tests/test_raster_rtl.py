@@ -91,6 +91,18 @@ def test_modes_and_reciprocals_on_amaranth(params):
     check(inputs, out, p)
 
 
+def test_back_to_back_triangles_one_channel():
+    """One channel: the row engine takes a row every 5 clocks, so a row of the next triangle
+    (another Omega, another shift) starts while the last row of this one is in the shifter.
+    These six triangles once caught the shifter reading the next row's shift amount (89 LSB
+    on a one-pixel row)."""
+    params = {**SMALL, "channels": 1}
+    p = make_unit("raster", spec=True, **params).params
+    inputs = random_triangles(np.random.default_rng(5), 6, **p)
+    out, _ = stream("raster", inputs, "amaranth", params)
+    check(inputs, out, p)
+
+
 coords = st.integers(-2 * 32 * 16, 2 * 32 * 16 - 1)
 
 

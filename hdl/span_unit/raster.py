@@ -72,7 +72,7 @@ class Raster(Unit):
         count = Signal(32)
         with m.If(self.i.valid & self.i.ready):
             m.d.sync += count.eq(count + 1)
-        sc = Schedule(m, "su", Const(1))
+        sc = Schedule(m, "su", Const(1), mux_groups=8)
         running, done = Signal(), Signal()
         src_ready = Signal()
         m.d.comb += [sc.start.eq(self.i.valid & self.i.ready),
