@@ -109,7 +109,7 @@ def test_linear_builds_no_mid_edge_logic():
               for m in ("linear", "default", "exact")}
     raster = {m: ScenePipeline.spec(**p).parts()[0][1] for m, p in params.items()}
     assert raster["linear"]["modes"] == "linear,linear,linear"
-    clocks = {m: Raster(**r).timing[0] for m, r in raster.items()}
+    clocks = {m: Raster.spec(**r).timing[0] for m, r in raster.items()}
     assert clocks["linear"] < clocks["default"] < clocks["exact"], clocks
     assert "rsqrt_seed" not in _rtlil_text(params["default"])
     assert "rsqrt_seed" in _rtlil_text(params["exact"])

@@ -101,8 +101,8 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
                 m.d.sync += [tr[f"E_{a}"].eq(tr[f"e1_{a}"]), tr[f"s0_{a}"].eq(tr[f"t0_{a}"]),
                              tr[f"s1_{a}"].eq(tr[f"t1_{a}"])]
             with m.Else():
-                m.d.sync += tr[f"E_{a}"].eq(tr[f"E_{a}"] + Mux(carry, tr[f"s1_{a}"],
-                                                                tr[f"s0_{a}"]))
+                m.d.sync += tr[f"E_{a}"].eq(Mux(carry, tr[f"E_{a}"] + tr[f"s1_{a}"],   # both
+                                                tr[f"E_{a}"] + tr[f"s0_{a}"]))  # sums, then pick
     clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
     xl = Mux(left_long, edge["l"]["i"], edge["s"]["i"])
     xr = Mux(left_long, edge["s"]["i"], edge["l"]["i"])
