@@ -1,6 +1,6 @@
 """The span engine (seeds 000, 001): edge walking, span-start evaluation, forward differences.
 
-Three parts, each a stream stage with backpressure:
+Four parts, each a stream stage with backpressure:
 
 - ``walker``: holds one triangle from the setup unit and emits one row per clock, from the
   first row whose centre is at or below the top vertex to the last one above the bottom vertex
@@ -8,12 +8,14 @@ Three parts, each a stream stage with backpressure:
   1/2)`` of the edge's crossing and the remainder ``r = i den - num``; a row step adds the
   quotient and remainder of ``2 S dx / (2 S dy)`` and carries once. The long edge runs top to
   bottom; the short one top to middle, then middle to bottom from the middle vertex's row.
-  Columns ``[left, right)`` are the pixels whose centres lie inside (top-left rule).
-- ``row_eval`` (pipelined): at the span's first pixel centre, the exact numerators
-  nu = X y2 - Y x2, nv = Y x1 - X y1 (eq 18-20, sub-pixel units) times the reciprocal give
-  (u, v); then per channel Phi(u, v) (eq 17) and its first difference along x,
-  alpha_u dPhi/du + alpha_v dPhi/dv + A. The start is corrected for the sub-pixel position by
-  construction, and rounding never accumulates across rows.
+  Columns ``[left, right)`` are the pixels whose centres lie inside (top-left rule). Beside
+  them, the exact numerators nu = X y2 - Y x2, nv = Y x1 - X y1 (eq 18-20, sub-pixel units)
+  of the left edge's first pixel and of column 0, stepped with additions.
+- ``row_engine`` (a schedule on shared multipliers, a row every ``ii`` clocks): (u, v) from
+  the numerators times the reciprocal, then per channel Phi(u, v) (eq 17) and its first
+  difference along x, Pu u + Pv v + P0. Exact numerators: rounding never accumulates across
+  rows.
+- ``row_queue``: four rows, so that no handshake runs back from the fragment stream.
 - ``stepper``: one fragment per clock, two additions per quadratic channel per pixel:
   Phi += d, d += 2A (one for a linear channel, whose 2A is 0).
 """
