@@ -75,8 +75,10 @@ class Raster(Unit):
         sc = Schedule(m, "su", Const(1), mux_groups=8)
         running, done = Signal(), Signal()
         src_ready = Signal()
+        # ready from registers only: the next triangle starts a clock after the walker takes
+        # this one, and the capture enables (hundreds of registers) wait on no handshake
         m.d.comb += [sc.start.eq(self.i.valid & self.i.ready),
-                     self.i.ready.eq(~running & (~done | src_ready))]
+                     self.i.ready.eq(~running & ~done)]
         v = {f.name: sc.input(f.name, self.i.payload[f.name]) for f in self.inputs}
         v["tri"] = sc.input("tri", count)
         coef = setup.program(sc, v)
@@ -90,13 +92,13 @@ class Raster(Unit):
             m.d.sync += done.eq(1)
         with m.Elif(src_ready):
             m.d.sync += done.eq(0)
-        rows_in, rows_out = Link("rows_in"), Link("rows_out")
+        rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
         rows = walker(m, w, ch, coef, done, src_ready, rows_in, culled)
-        rows, re = row_engine(m, w, ch, rows, rows_in, rows_out)
-        rows, queued, take = row_queue(m, rows, rows_out.valid, rows_out.ready)
+        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space)
+        rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o)
-        busy = cur | self.o.valid | rows_in.valid | rows_out.valid | queued | running | done
+        busy = cur | self.o.valid | rows_in.valid | re_valid | queued | running | done
         for k in range(1, re.length):
             busy = busy | re.at(k)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]

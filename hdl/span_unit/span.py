@@ -15,11 +15,12 @@ Four parts, each a stream stage with backpressure:
   the numerators times the reciprocal, then per channel Phi(u, v) (eq 17) and its first
   difference along x, Pu u + Pv v + P0. Exact numerators: rounding never accumulates across
   rows.
-- ``row_queue``: four rows, so that no handshake runs back from the fragment stream.
+- ``row_queue``: eight rows, with credits, so that no handshake runs back from the fragment
+  stream and the row engine never stalls.
 - ``stepper``: one fragment per clock, two additions per quadratic channel per pixel:
   Phi += d, d += 2A (one for a linear channel, whose 2A is 0).
 """
-from amaranth.hdl import Cat, Mux, Signal
+from amaranth.hdl import Cat, Const, Mux, Signal
 from amaranth.lib.fifo import SyncFIFO
 
 from ..sched import OPERAND, Schedule
@@ -114,19 +115,19 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
     return {"j": j, "xs": clamp(xl), "xe": clamp(xr), **num, **held}
 
 
-def row_engine(m, w, channels, rows, row_link, out_link):
+def row_engine(m, w, channels, rows, row_link, space):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
-    d = P0 + Pu u + Pv v. Returns the row values for the stepper."""
+    d = P0 + Pu u + Pv v. The engine never stalls: a row starts only when ``space`` (a
+    register of the row queue) promises a place for it. Returns the row values for the
+    stepper, the schedule and the output's valid bit."""
     mults = channels + 1
     ii = -(-(2 + 7 * channels) // mults)
-    en = Signal(name="re_en")
     out_valid = Signal(name="re_out_valid")
-    sc = Schedule(m, "re", en, ii=ii, mults=mults)
-    start = row_link.valid & sc.aligned
-    m.d.comb += [en.eq(~out_valid | out_link.ready), sc.start.eq(start),
-                 row_link.ready.eq(en & sc.aligned), out_link.valid.eq(out_valid)]
+    sc = Schedule(m, "re", Const(1), ii=ii, mults=mults)
+    m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
+                 row_link.ready.eq(sc.aligned & space)]
     v = {k: sc.input(k, val) for k, val in rows.items()}
     sc.shift = (v["sh"], w.FQ - w.R)
     fq = lambda x: x[:OPERAND].as_signed()
@@ -156,25 +157,26 @@ def row_engine(m, w, channels, rows, row_link, out_link):
         out[k] = v[k]
     out = {k: sc.apply(f"o_{k}", lambda r: r, x, after=end) for k, x in out.items()}
     sc.outputs.update(out.values())
-    with m.If(en):
-        m.d.sync += out_valid.eq(sc.at(end))
-    with m.Elif(out_link.ready):
-        m.d.sync += out_valid.eq(0)
+    m.d.sync += out_valid.eq(sc.at(end))
     sc.finish()
     sc.check()
-    return out, sc
+    return out, sc, out_valid
 
 
-def row_queue(m, rows, valid, ready):
-    """A four-row queue (distributed RAM) between the row engine and the stepper: both sides'
-    handshakes come from registers, so no combinational path runs from the fragment stream's
+def row_queue(m, rows, valid, started, space, depth=8):
+    """A queue of ``depth`` rows (distributed RAM, 16 deep at no extra cost) between the row
+    engine and the stepper, with credits: ``space`` (registered) is high while fewer than
+    ``depth`` rows are started and not yet taken, so a started row always finds a place and
+    the row engine needs no enable. No combinational path runs from the fragment stream's
     ready back into the row engine and the walker. Returns ``(rows, valid, take)``."""
     names = list(rows)
     width = sum(len(rows[k]) for k in names)
-    fifo = SyncFIFO(width=width, depth=4)
+    fifo = SyncFIFO(width=width, depth=depth)
     m.submodules.row_queue = fifo
-    m.d.comb += [fifo.w_data.eq(Cat(*(rows[k] for k in names))), fifo.w_en.eq(valid),
-                 ready.eq(fifo.w_rdy)]
+    m.d.comb += [fifo.w_data.eq(Cat(*(rows[k] for k in names))), fifo.w_en.eq(valid)]
+    held = Signal(range(depth + 1), name="rq_held")      # rows started, not yet taken
+    nxt = held + started - fifo.r_en
+    m.d.sync += [held.eq(nxt), space.eq(nxt < depth)]
     out, at = {}, 0
     for k in names:
         n = len(rows[k])
