@@ -239,21 +239,14 @@ class Schedule:
         self._multipliers()
 
     def _multipliers(self):
-        """The multipliers: each operand a one-hot AND-OR over its operations, registered;
+        """The multipliers: each operand a one-hot AND-OR over its distinct operands, registered;
         four partial products registered; the middle two summed beside the outer two
         (concatenated: they do not overlap), then one addition."""
         for idx, unit in enumerate(self.mults):
             if not unit:
                 continue
             n = f"{self.name}_m{idx}"
-            ops = []
-            for j, (k, a, b) in enumerate(unit):
-                sa = Signal(signed(OPERAND), name=f"{n}_a{j}")
-                sb = Signal(signed(OPERAND), name=f"{n}_b{j}")
-                self.m.d.comb += [sa.eq(a), sb.eq(b)]
-                ops.append((self.at(k), sa, sb))
-            opa = [Mux(sel, a, 0) for sel, a, _ in ops]
-            opb = [Mux(sel, b, 0) for sel, _, b in ops]
+            opa, opb = _operands(self, n, unit)
             if self.mux_groups:
                 opa, opb = (self._grouped(f"{n}_{x}", terms) for x, terms in (("a", opa),
                                                                           ("b", opb)))
@@ -293,6 +286,31 @@ class Schedule:
             r = self.reads.get(reg, w)
             if r > w + self.ii and reg not in self.outputs:
                 raise AssertionError(f"{reg.name}: written at {w}, read at {r}, ii {self.ii}")
+
+
+def _key(value):
+    """Structural identity of an operand (names may repeat; the signals themselves do not)."""
+    return repr(value), tuple(sorted(id(s) for s in _deps(value)))
+
+
+def _operands(sc, n, unit):
+    """Each side's multiplexer terms: one per distinct operand, selected by the OR of the
+    phase bits of the products that use it. A product's operands are swapped where that lets
+    a side reuse an operand it already has (a b = b a): fewer, narrower AND-OR trees."""
+    sides = ({}, {})                                       # key -> [value, phase bits]
+    for k, a, b in unit:
+        ka, kb = _key(a), _key(b)
+        if not (ka in sides[0] or kb in sides[1]) and (kb in sides[0] or ka in sides[1]):
+            (a, ka), (b, kb) = (b, kb), (a, ka)
+        for side, key, value in ((0, ka, a), (1, kb, b)):
+            sides[side].setdefault(key, [value, []])[1].append(sc.at(k))
+    terms = ([], [])
+    for side, name in enumerate("ab"):
+        for j, (value, bits) in enumerate(sides[side].values()):
+            sig = Signal(signed(OPERAND), name=f"{n}_{name}{j}")
+            sc.m.d.comb += sig.eq(value)
+            terms[side].append(Mux(_or_tree(bits), sig, 0))
+    return terms
 
 
 def _or_tree(terms):
