@@ -19,6 +19,8 @@ from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
 from amaranth.hdl._ast import SignalDict, SignalSet   # Signals are not hashable
 from amaranth.lib.memory import Memory
 
+from .dsp import mult18
+
 __all__ = ["Schedule", "OPERAND", "MUL_LAT"]
 
 OPERAND = 35          # signed operand bits: an 18-bit signed top slice, a 17-bit unsigned low one
@@ -30,11 +32,14 @@ def _deps(value):
 
 
 class Schedule:
-    def __init__(self, m, name, en, ii=None, mults=1, shift=None, mux_groups=None):
+    def __init__(self, m, name, en, ii=None, mults=1, shift=None, mux_groups=None,
+                 platform=None):
         """``shift = (amount, left)``: products asked for ``shifted`` come out as
         ``(a * b << left) >> amount``, two clocks later (one two-stage shifter per multiplier
-        that has such products; ``amount`` must be steady over the job)."""
+        that has such products; ``amount`` must be steady over the job). ``platform``: the
+        multipliers' blocks are instantiated with their registers on ECP5 (:mod:`hdl.dsp`)."""
         self.m, self.name, self.en, self.ii, self.shift = m, name, en, ii, shift
+        self.platform = platform
         # with many operations per multiplier: the operand multiplexer in two registered
         # levels (groups of ``mux_groups`` operations, then the groups), one clock more
         self.mux_groups, self.lat = mux_groups, MUL_LAT + (1 if mux_groups else 0)
@@ -251,19 +256,17 @@ class Schedule:
                 opa, opb = (self._grouped(f"{n}_{x}", terms) for x, terms in (("a", opa),
                                                                           ("b", opb)))
             opa, opb = _or_tree(opa), _or_tree(opb)
-            ra = Signal(signed(OPERAND), name=f"{n}_a", reset_less=True)
-            rb = Signal(signed(OPERAND), name=f"{n}_b", reset_less=True)
+            ra = Signal(signed(OPERAND), name=f"{n}_a")         # registered in the blocks
+            rb = Signal(signed(OPERAND), name=f"{n}_b")
+            self.m.d.comb += [ra.eq(opa), rb.eq(opb)]
             lo = OPERAND - 18
             xs = {"h": (ra[lo:].as_signed(), rb[lo:].as_signed()),
                   "l": (ra[:lo], rb[:lo])}
-            part = {pa + pb: Signal(signed(36), name=f"{n}_{pa}{pb}", reset_less=True)
-                    for pa in "hl" for pb in "hl"}
+            part = {pa + pb: mult18(self.m, f"{n}_{pa}{pb}", xs[pa][0], xs[pb][1], self.en,
+                                    self.platform) for pa in "hl" for pb in "hl"}
             mid = Signal(signed(38), name=f"{n}_mid", reset_less=True)
             outer = Signal(signed(2 * OPERAND), name=f"{n}_outer", reset_less=True)
             with self.m.If(self.en):
-                self.m.d.sync += [ra.eq(opa), rb.eq(opb)]
-                self.m.d.sync += [part[pa + pb].eq(xs[pa][0] * xs[pb][1])
-                                  for pa in "hl" for pb in "hl"]
                 self.m.d.sync += [mid.eq(part["hl"] + part["lh"]),
                                   outer.eq(Cat(part["ll"][:2 * lo], part["hh"]))]
                 self.m.d.sync += self._total(idx).eq(outer + (mid << lo))

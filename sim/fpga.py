@@ -38,6 +38,7 @@ from amaranth.hdl import Cat, Module, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from hdl.dsp import Target
 from hdl.units import UNITS, make_unit
 
 from .cli_common import UsageError, unit_names, user_errors
@@ -136,7 +137,7 @@ def _run(cmd, cwd, log):
 def synthesise(label, name, params, device, root=OUT / "cache"):
     """Verilog of the wrapped design, synthesis for ``device``; returns (work dir, summary)."""
     wrap = SerialWrapper(make_unit(name, **params))
-    text = verilog.convert(wrap, name="top", emit_src=False)
+    text = verilog.convert(wrap, name="top", emit_src=False, platform=Target(device))
     key = hashlib.sha256(f"{FLOW}\n{device}\n{text}".encode()).hexdigest()[:16]
     work = root / f"{label}-{device}-{key}"
     work.mkdir(parents=True, exist_ok=True)

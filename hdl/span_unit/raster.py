@@ -72,7 +72,7 @@ class Raster(Unit):
         count = Signal(32)
         with m.If(self.i.valid & self.i.ready):
             m.d.sync += count.eq(count + 1)
-        sc = Schedule(m, "su", Const(1), mux_groups=8)
+        sc = Schedule(m, "su", Const(1), mux_groups=8, platform=platform)
         running, done = Signal(), Signal()
         src_ready = Signal()
         # ready from registers only: the next triangle starts a clock after the walker takes
@@ -95,7 +95,7 @@ class Raster(Unit):
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
         rows = walker(m, w, ch, coef, done, src_ready, rows_in, culled)
-        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space)
+        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform)
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o)
         busy = cur | self.o.valid | rows_in.valid | re_valid | queued | running | done

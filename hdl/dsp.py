@@ -1,0 +1,59 @@
+"""One 18 x 18 multiplier with a registered operand pair and a registered product.
+
+Yosys (0.70) infers ECP5's MULT18X18D but leaves the registers around it in the fabric
+(YosysHQ/yosys#5814), so a product pays a route into the block and a route out of it inside one
+clock: 10.5 ns in the raster, the critical path once its handshakes were registered. On ECP5
+the block is instantiated with its own input and output registers (REG_INPUTA/B, REG_OUTPUT on
+CLK0, enabled by CE0), which leaves only register-to-block routes in the fabric. Everywhere
+else (simulation, iCE40, where Yosys packs SB_MAC16's registers itself) the same two clocks
+are written behaviourally, so both forms are cycle-for-cycle the same.
+
+The FPGA flow hands :class:`Target` to ``elaborate(platform)``; a design asks :func:`ecp5`.
+"""
+from amaranth.hdl import ClockSignal, Const, Instance, Signal, Value, signed
+
+__all__ = ["Target", "ecp5", "mult18"]
+
+
+class Target:
+    """The platform of the FPGA flow (``sim.fpga``): only the family is known."""
+
+    def __init__(self, family):
+        self.family = family
+
+
+def ecp5(platform):
+    return getattr(platform, "family", None) == "ecp5"
+
+
+def mult18(m, name, a, b, en, platform):
+    """``a * b`` (each at most 18 bits, signed or unsigned by its shape) two clocks later:
+    operands registered, then the product; everything holds while ``en`` is low. Returns the
+    36-bit signed product register."""
+    a, b = Value.cast(a), Value.cast(b)
+    for x in (a, b):
+        if len(x) > 18 or (len(x) == 18 and not x.shape().signed):
+            raise ValueError(f"{name}: an operand of {len(x)} bits does not fit 18 signed")
+    p = Signal(signed(36), name=f"{name}_p", reset_less=True)
+    if ecp5(platform):
+        ext = lambda x: x.as_signed() if x.shape().signed else x     # to 18 bits, by sign
+        pa, pb = (Signal(18, name=f"{name}_{s}") for s in "ab")
+        m.d.comb += [pa.eq(ext(a)), pb.eq(ext(b))]
+        ports = {f"i_A{k}": pa[k] for k in range(18)}
+        ports.update({f"i_B{k}": pb[k] for k in range(18)})
+        ports.update({f"i_C{k}": Const(0) for k in range(18)})
+        ports.update({f"o_P{k}": p[k] for k in range(36)})
+        reg = {f"p_REG_{r}_{x}": v for r in ("INPUTA", "INPUTB", "OUTPUT")
+               for x, v in (("CLK", "CLK0"), ("CE", "CE0"), ("RST", "RST0"))}
+        m.submodules[name] = Instance(
+            "MULT18X18D", **reg, p_GSR="DISABLED", p_RESETMODE="SYNC",
+            i_SIGNEDA=Const(int(a.shape().signed)), i_SIGNEDB=Const(int(b.shape().signed)),
+            i_SOURCEA=Const(0), i_SOURCEB=Const(0), i_CLK0=ClockSignal(), i_CE0=en,
+            i_RST0=Const(0), **{f"i_{s}{k}": Const(0) for s in ("CLK", "CE", "RST")
+                                 for k in (1, 2, 3)}, **ports)
+    else:
+        ra, rb = (Signal(x.shape(), name=f"{name}_r{s}", reset_less=True)
+                  for x, s in ((a, "a"), (b, "b")))
+        with m.If(en):
+            m.d.sync += [ra.eq(a), rb.eq(b), p.eq(ra * rb)]
+    return p
