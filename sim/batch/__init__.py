@@ -25,6 +25,7 @@ from hdl.units import make_unit
 from ..verilog import BUILD, build_lock, export, prune_objects, verilator_env
 
 HARNESS = Path(__file__).with_name("harness.cpp")
+SHM = "/dev/shm"        # the exchange files in memory where the system has it
 WARNINGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT"]
 # Verilator's own optimisations; Amaranth's Verilog assigns no X, so X handling may be fast.
 # texel_decode: about 5 against 3 million rows/s with the defaults (make bench).
@@ -47,26 +48,36 @@ def _ctype(width):
                 if width <= w)
 
 
+def row_type(unit):
+    """The exchange files' integer: 32 bits where every row field fits (half the bytes to
+    write and read: the files, not the model, bound the small units' rate), else 64."""
+    return np.int32 if all(f.fmt.width <= 31 for f in (*unit.inputs, *unit.outputs)) \
+        else np.int64
+
+
 def ports_header(unit):
     """The per-unit glue: field values <-> the model's named ports."""
     fin, fout, funi = unit.inputs, unit.outputs, unit.uniforms
     for f in (*fin, *fout, *funi):
         if f.fmt.width > 64:
             raise BatchError(f"{unit.NAME}.{f.name}: fields wider than 64 bits are not supported")
+    row = "int32_t" if row_type(unit) is np.int32 else "int64_t"
     lines = [f"#define N_IN {len(fin)}", f"#define N_OUT {len(fout)}",
-             f"#define MANY {int(bool(unit.status_ports))}", f"#define N_UNI {len(funi)}"]
-    for func, prefix, fields in (("set_inputs", "i", fin), ("set_uniforms", "u", funi)):
-        lines.append(f"static inline void {func}(Vtop* t, const int64_t* r) {{")
+             f"#define MANY {int(bool(unit.status_ports))}", f"#define N_UNI {len(funi)}",
+             f"typedef {row} row_t;"]
+    for func, prefix, fields, t in (("set_inputs", "i", fin, "row_t"),
+                                    ("set_uniforms", "u", funi, "int64_t")):
+        lines.append(f"static inline void {func}(Vtop* t, const {t}* r) {{")
         for k, f in enumerate(fields):
             mask = (1 << f.fmt.width) - 1
             lines.append(f"    t->{prefix}_{f.name} = ({_ctype(f.fmt.width)})((uint64_t)r[{k}] & "
                          f"{mask:#x}ULL);")
         lines.append("}")
-    lines.append("static inline void get_outputs(Vtop* t, int64_t* r) {")
+    lines.append("static inline void get_outputs(Vtop* t, row_t* r) {")
     for k, f in enumerate(fout):
         get = f"(uint64_t)t->o_{f.name}"
         lines.append(f"    r[{k}] = " + (f"sext({get}, {f.fmt.width});" if f.fmt.signed
-                                          else f"(int64_t){get};"))
+                                          else f"(row_t){get};"))
     lines.append("}")
     return "\n".join(lines) + "\n"
 
@@ -119,9 +130,11 @@ def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=N
     unit = make_unit(name, spec=True, **params)
     fin, fout = unit.inputs, unit.outputs
     n = len(next(iter(inputs.values()))) if fin else 0
-    rows = np.stack([np.asarray(inputs[f.name], np.int64) for f in fin], -1) if n else \
-        np.zeros((0, len(fin)), np.int64)
-    with tempfile.TemporaryDirectory(dir=exe.parent.parent) as tmp:
+    dtype = row_type(unit)
+    rows = np.empty((n, len(fin)), dtype)
+    for k, f in enumerate(fin):
+        rows[:, k] = inputs[f.name]
+    with tempfile.TemporaryDirectory(dir=SHM if os.access(SHM, os.W_OK) else None) as tmp:
         tmp = Path(tmp)
         with open(tmp / "in.bin", "wb") as f:
             np.uint64(n).tofile(f)
@@ -155,9 +168,9 @@ def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=N
         reader.join()
         if proc.returncode != 0:
             raise BatchError(f"batch run of {name} failed: {''.join(errors).strip()}")
-        data = np.fromfile(tmp / "out.bin", np.int64)
-    outs, cycles, latency, culled = (int(v) for v in data[:4])
-    table = data[4:].reshape(outs, len(fout))
+        data = np.fromfile(tmp / "out.bin", np.uint8)
+    outs, cycles, latency, culled = (int(v) for v in data[:32].view(np.int64))
+    table = data[32:].view(dtype).reshape(outs, len(fout))
     out = {f.name: table[:, k] for k, f in enumerate(fout)}          # views, no copies
     info = {"latency": None if latency < 0 else latency, "cycles": cycles, "waves": wave}
     if unit.status_ports:

@@ -2,13 +2,15 @@
 //
 //   harness IN.bin OUT.bin P_VALID P_READY SEED [TRACE FIRST LAST]
 //
-// TRACE: a VCD of the cycles FIRST..LAST. IN.bin: u64 rows, then rows x N_IN int64 field values (raw, as in the npz). The source
+// TRACE: a VCD of the cycles FIRST..LAST. IN.bin: u64 rows, N_UNI int64 uniforms, then
+// rows x N_IN row_t field values (raw). The source
 // offers rows with random valid gaps (P_VALID) and holds each until it is accepted; the sink
 // is ready with probability P_READY each cycle: the same rules as sim/stream.py's Traffic,
 // from one generator (splitmix64). A stalled output must hold its payload: the harness checks
 // that and fails naming the cycle. OUT.bin: u64 rows, i64 cycles, latency (-1: none), culled,
-// then rows x N_OUT int64. Progress goes to stderr as "progress SENT OUTPUTS" lines.
-// ports.h (generated per unit by sim/batch.py) defines N_IN, N_OUT, MANY, set_inputs and
+// then rows x N_OUT row_t (int32 or int64, chosen per unit by sim/batch). Progress goes to
+// stderr as "progress SENT OUTPUTS" lines.
+// ports.h (generated per unit by sim/batch.py) defines N_IN, N_OUT, MANY, row_t, set_inputs and
 // get_outputs.
 #include <cstdint>
 #include <cstdio>
@@ -53,8 +55,9 @@ int main(int argc, char** argv) {
     if (!f || fread(&n, 8, 1, f) != 1) fail("cannot read the input file", 0);
     std::vector<int64_t> uni(N_UNI + 1);
     if (N_UNI && fread(uni.data(), 8, N_UNI, f) != N_UNI) fail("short input file", 0);
-    std::vector<int64_t> in(n * N_IN + 1);
-    if (n && fread(in.data(), 8, n * N_IN, f) != n * N_IN) fail("short input file", 0);
+    std::vector<row_t> in(n * N_IN + 1);
+    if (n && fread(in.data(), sizeof(row_t), n * N_IN, f) != n * N_IN)
+        fail("short input file", 0);
     fclose(f);
     const double p_valid = atof(argv[3]), p_ready = atof(argv[4]);
     Rng rng{strtoull(argv[5], nullptr, 10)};
@@ -87,9 +90,9 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 2; k++) { tick(0, 0); tick(0, 1); }
     top->rst = 0;
 
-    std::vector<int64_t> out;
+    std::vector<row_t> out;
     if (!MANY) out.reserve(n * N_OUT);
-    std::vector<int64_t> cur(N_OUT + 1), held(N_OUT + 1);
+    std::vector<row_t> cur(N_OUT + 1), held(N_OUT + 1);
     bool valid = false, was_held = false, busy = true;
     uint64_t sent = 0, cycles = 0, quiet = 0, outs = 0;
     int64_t first_in = -1, first_out = -1;
@@ -105,7 +108,7 @@ int main(int argc, char** argv) {
         tick(cycles, 0);
         const bool i_ready = top->i_ready, o_valid = top->o_valid;
         if (o_valid) get_outputs(top, cur.data());
-        if (was_held && (!o_valid || memcmp(cur.data(), held.data(), 8 * N_OUT)))
+        if (was_held && (!o_valid || memcmp(cur.data(), held.data(), sizeof(row_t) * N_OUT)))
             fail("a stalled output changed or was withdrawn before it was taken", cycles);
         was_held = o_valid && !ready;
         if (was_held) held = cur;
@@ -147,7 +150,7 @@ int main(int argc, char** argv) {
     const int64_t head[4] = {(int64_t)outs, (int64_t)cycles,
                              first_out < 0 ? -1 : first_out - first_in, culled};
     fwrite(head, 8, 4, g);
-    fwrite(out.data(), 8, out.size(), g);
+    fwrite(out.data(), sizeof(row_t), out.size(), g);
     fclose(g);
     return 0;
 }
