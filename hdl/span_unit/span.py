@@ -153,9 +153,16 @@ def row_engine(m, w, channels, rows, row_link, space, platform=None):
         out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0, x: p0 + x, c["p0"], puv, after=k)
         out[f"c{ch}_a2"] = c["a2"]
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
-    for k in ("j", "xs", "xe", "tri"):
-        out[k] = v[k]
-    out = {k: sc.apply(f"o_{k}", lambda r: r, x, after=end) for k, x in out.items()}
+    # the outputs registered; what the stepper would otherwise compute from the queue's
+    # RAM on its way into a register is computed here: the rounding half in Phi, and the
+    # span's tests (empty, one pixel)
+    half = 1 << (w.FI - VALUE.frac_bits - 1)
+    fns = {k: (lambda r: r, x) for k, x in out.items()}
+    fns.update({f"phi{ch}": (lambda r: r + half, out[f"phi{ch}"]) for ch in range(channels)})
+    fns.update({k: (lambda r: r, v[k]) for k in ("j", "xs", "xe", "tri")})
+    fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
+    fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
+    out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
     sc.outputs.update(out.values())
     m.d.sync += out_valid.eq(sc.at(end))
     sc.finish()
@@ -201,10 +208,10 @@ def stepper(m, w, channels, rows, rows_valid, rows_take, o):
     take = ~cur | (en & last)
     m.d.comb += rows_take.eq(take & rows_valid)
     with m.If(take & rows_valid):
-        m.d.sync += [cur.eq(rows["xs"] < rows["xe"]), last.eq(rows["xs"] + 1 == rows["xe"]),
+        m.d.sync += [cur.eq(rows["some"]), last.eq(rows["one"]),
                      x.eq(rows["xs"]), xe.eq(rows["xe"]), y.eq(rows["j"]), tri.eq(rows["tri"])]
-        for ch in range(channels):             # Phi carries the output's rounding half
-            m.d.sync += [phi[ch].eq(rows[f"phi{ch}"] + (1 << (shift - 1))),
+        for ch in range(channels):             # Phi arrives with the rounding half in it
+            m.d.sync += [phi[ch].eq(rows[f"phi{ch}"]),
                          d[ch].eq(rows[f"d{ch}"]), a2[ch].eq(rows[f"c{ch}_a2"])]
     with m.Elif(cur & en):
         with m.If(last):
