@@ -145,6 +145,24 @@ def frames_from_uv(pos, nrm, uv, tris):
     return T, B, N
 
 
+def texcoords(scene):
+    """Per-vertex texture coordinates (s, t) of the built-in shapes, in tiles (scenes.md: the
+    grid's (i / M, j / N) times ``repeat``; the plane's (x + 1) / 2, (y + 1) / 2 likewise)."""
+    msh, rep = scene["mesh"], np.array(scene["bump"]["repeat"], float)
+    m, n = msh["segments"]
+    rows, cols = {"torus": (m, n), "sphere": (m, n + 1), "plane": (m + 1, n + 1)}[msh["shape"]]
+    i, j = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
+    return (np.stack([i / m, j / n], -1).reshape(-1, 2) * rep)
+
+
+def frames(scene):
+    """(T, B, N) per vertex of a scene's mesh, in world space (its rotation applied)."""
+    from .scene import rotation
+    msh = scene["mesh"]
+    rot = rotation(msh["rotate"])
+    return tuple(f @ rot.T for f in grid_frames(msh["shape"], *msh["segments"]))
+
+
 def to_tangent(v, T, B, N):
     """World vectors (..., 3) in the tangent frame (components along T, B, N)."""
     return np.stack([np.einsum("...i,...i->...", v, f) for f in (T, B, N)], -1)

@@ -185,6 +185,18 @@ def _grid_triangles(m, n, wrap_i, wrap_j):
     return np.array(tris)
 
 
+def rotation(degrees):
+    """The mesh's rotation matrix: about x, then y, then z."""
+    rot = np.eye(3)
+    for axis, deg in enumerate(degrees):
+        c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+        a, b = [k for k in range(3) if k != axis]
+        r = np.eye(3)
+        r[a, a], r[a, b], r[b, a], r[b, b] = c, -s, s, c
+        rot = r @ rot
+    return rot
+
+
 def mesh(scene):
     """(positions, normals, triangles) in world space."""
     msh = scene["mesh"]
@@ -209,13 +221,7 @@ def mesh(scene):
         nrm = np.broadcast_to([0.0, 0.0, 1.0], pos.shape)
         tris = _grid_triangles(m + 1, n + 1, False, False)
     pos, nrm = pos.reshape(-1, 3), nrm.reshape(-1, 3)
-    rot = np.eye(3)
-    for axis, deg in enumerate(msh["rotate"]):
-        c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
-        a, b = [k for k in range(3) if k != axis]
-        r = np.eye(3)
-        r[a, a], r[a, b], r[b, a], r[b, b] = c, -s, s, c
-        rot = r @ rot                            # x first, then y, then z
+    rot = rotation(msh["rotate"])
     pos = pos @ rot.T * msh["scale"] + np.array(msh["translate"])
     nrm = nrm @ rot.T
     # drop triangles with a repeated vertex (the sphere's poles)
