@@ -5,8 +5,10 @@ and ``build/bench/bench.md``.
 
 Every simulator streams the same vectors (hard cases, then random rows), with ready and valid
 held high; the default scene's pipeline renders the default scene's triangles (all of them on
-the batch path, the first few on the others); the batch path streams them repeated up to ``--batch-rows`` so that its run is long
-enough to time (its process start-up is included). Build times are those recorded when each
+the batch path, the first few on the others); the batch path streams the vectors repeated up
+to ``--batch-rows`` (raster: a thousandth as many triangles, the scene a five-hundredth: about
+a million fragments either way) so that its run is long enough to time (its process start-up
+is included). Build times are those recorded when each
 model was built (models are cached under ``build/``).
 
     make bench      (python -m sim.bench [--units U,U] [--batch-rows N])
@@ -67,7 +69,7 @@ def main(argv=None):
                                     "pipeline (default: all of them)")
     ap.add_argument("--batch-rows", type=int, default=2_000_000,
                     help="rows the batch path streams, the vectors repeated (default 2,000,000;"
-                         " raster: a thousandth as many triangles)")
+                         " raster: a thousandth as many triangles, scene a five-hundredth)")
     args = ap.parse_args(argv)
     with user_errors():
         names = unit_names(args.units, {**UNITS, "scene": None})
@@ -78,7 +80,7 @@ def main(argv=None):
         rows = []
         for name in names:
             if name == "scene":
-                rows += scene_rows(sims)
+                rows += scene_rows(sims, args.batch_rows // 500)
                 continue
             params = RASTER if name == "raster" else {}
             full = make_unit(name, spec=True, **params).params
@@ -95,9 +97,10 @@ def main(argv=None):
         report(rows)
 
 
-def scene_rows(sims):
+def scene_rows(sims, triangles):
     """The default scene's pipeline rendering the default scene: every triangle on the batch
-    path, the first few on the others (fragments per second either way)."""
+    path (the scene repeated up to ``triangles``), the first few on the others (fragments per
+    second either way)."""
     from golden.scene import load, prepare
     prep = prepare(load(SCENE))
     full = make_unit("scene", spec=True, **prep["params"]).params     # the key of its model
@@ -105,6 +108,9 @@ def scene_rows(sims):
     for sim in sims:
         n = SCENE_TRIANGLES.get(sim)
         inputs = {k: v[:n] for k, v in prep["inputs"].items()}
+        if n is None:                  # the batch path: the scene repeated, a run long enough
+            reps = max(1, triangles // len(next(iter(inputs.values()))))    # to time
+            inputs = {k: np.tile(v, reps) for k, v in inputs.items()}
         print(f"scene_default on {sim}: {len(next(iter(inputs.values()))):,} triangles",
               file=sys.stderr, flush=True)
         rows.append(measure("scene", full, sim, inputs, prep["uniforms"], "scene_default"))
