@@ -188,9 +188,9 @@ class Schedule:
         rem = Signal(len(den) + 1, name=f"{self.name}_{name}_rem", reset_less=True)
         low = Signal(q_bits, name=f"{self.name}_{name}_low", reset_less=True)
         q = Signal(q_bits, name=f"{self.name}_{name}_q", reset_less=True)
-        run = Signal(name=f"{self.name}_{name}_run")
-        for t in range(1, q_bits + 1):
-            run = run | self.at(k + t)
+        run = Signal(name=f"{self.name}_{name}_run")   # offsets k+1 .. k+q_bits, a register
+        with self.m.If(self.en):
+            self.m.d.sync += run.eq(self.at(k) | (run & ~self.at(k + q_bits)))
         with self.m.If(self.en):
             with self.m.If(self.at(k)):
                 self.m.d.sync += [rem.eq(num >> q_bits), low.eq(num[:q_bits]), q.eq(0)]
@@ -306,13 +306,19 @@ def _operands(sc, n, unit):
         if not (ka in sides[0] or kb in sides[1]) and (kb in sides[0] or ka in sides[1]):
             (a, ka), (b, kb) = (b, kb), (a, ka)
         for side, key, value in ((0, ka, a), (1, kb, b)):
-            sides[side].setdefault(key, [value, []])[1].append(sc.at(k))
+            sides[side].setdefault(key, [value, []])[1].append(k)
     terms = ([], [])
     for side, name in enumerate("ab"):
-        for j, (value, bits) in enumerate(sides[side].values()):
+        for j, (value, ks) in enumerate(sides[side].values()):
             sig = Signal(signed(OPERAND), name=f"{n}_{name}{j}")
             sc.m.d.comb += sig.eq(value)
-            terms[side].append(Mux(_or_tree(bits), sig, 0))
+            if min(ks) > 0:     # the select a register: the OR of the phase bits a clock early
+                sel = Signal(name=f"{n}_{name}{j}_sel")
+                with sc.m.If(sc.en):
+                    sc.m.d.sync += sel.eq(_or_tree([sc.at(k - 1) for k in ks]))
+            else:
+                sel = _or_tree([sc.at(k) for k in ks])
+            terms[side].append(Mux(sel, sig, 0))
     return terms
 
 
