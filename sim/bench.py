@@ -30,7 +30,8 @@ from .verilog import BUILD, SCENES
 
 OUT = BUILD / "bench"
 ROWS = {"amaranth": 5000, "icarus": 20000, "cocotb-verilator": 20000, "verilator": 20000}
-TRIANGLES = {"amaranth": 20, "icarus": 40, "cocotb-verilator": 40, "verilator": 40}
+TRIANGLES = {"amaranth": 4, "icarus": 40, "cocotb-verilator": 40, "verilator": 40}   # amaranth:
+# about 110 cycles/s on the shared-multiplier raster (its thousands of registers), so few
 RASTER = {"screen_bits": 10}
 SCENE = SCENES / "default.toml"
 SCENE_TRIANGLES = {"amaranth": 2, "icarus": 4, "cocotb-verilator": 4}   # verilator: all
