@@ -224,19 +224,17 @@ class Schedule:
         """With ``ii``: a job may start: ``ii`` clocks after the last start, or any time when
         no job is in flight."""
         if not hasattr(self, "_aligned"):
-            self._aligned = Signal(name=f"{self.name}_aligned")
+            self._aligned = Signal(name=f"{self.name}_aligned", init=1)
         return self._aligned
 
     def _align(self):
-        """``aligned`` from two registers: the slot count and ``idle`` (no job in flight next
-        clock), so that nothing wide lies between the phase bits and a start."""
+        """``aligned``, a register: the next clock's slot count is 0, or no job will be in
+        flight then, so that nothing lies between it and the start it allows."""
         count = Signal(range(self.ii), name=f"{self.name}_slot")
-        idle = Signal(name=f"{self.name}_idle", init=1)
+        nxt = Mux(self.start, 1 % self.ii, Mux(count == self.ii - 1, 0, count + 1))
+        idle = ~_or_tree([self.start] + [self.at(k) for k in range(1, self.length - 1)])
         with self.m.If(self.en):
-            self.m.d.sync += [
-                count.eq(Mux(self.start, 1 % self.ii, Mux(count == self.ii - 1, 0, count + 1))),
-                idle.eq(~_or_tree([self.start] + [self.at(k) for k in range(1, self.length - 1)]))]
-        self.m.d.comb += self.aligned.eq(~count.any() | idle)          # no "x == 0": lint
+            self.m.d.sync += [count.eq(nxt), self.aligned.eq(~nxt.any() | idle)]  # lint: no "== 0"
 
     def finish(self):
         if self.ii is not None:
