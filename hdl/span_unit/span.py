@@ -44,10 +44,9 @@ def _step(i, r, q, d, n):
 
 
 def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
-    """Rows from triangles. ``src``: the setup's values; returns the row values: the span
-    ``[xs, xe)`` of row ``j``, the (u, v) numerators of its first pixel (``nu``, ``nv``) and
-    the triangle's constants."""
-    size = 1 << w.screen_bits
+    """Rows from triangles. ``src``: the setup's values; returns the row values: the edges'
+    columns ``xl``, ``xr`` of row ``j`` (unclamped), the numerator tracks (the left edge's
+    first pixel E, column 0 B) and the triangle's constants."""
     have = Signal()
     j, j1, jm = Signal(w.wrow), Signal(w.wrow), Signal(w.wrow)
     left_long = Signal()
@@ -106,13 +105,11 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
             with m.Else():
                 m.d.sync += tr[f"E_{a}"].eq(Mux(carry, tr[f"E_{a}"] + tr[f"s1_{a}"],   # both
                                                 tr[f"E_{a}"] + tr[f"s0_{a}"]))  # sums, then pick
-    clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
     xl = Mux(left_long, edge["l"]["i"], edge["s"]["i"])
     xr = Mux(left_long, edge["s"]["i"], edge["l"]["i"])
-    border = xl < 0                               # the span starts at column 0
-    num = {f"n{a}": Mux(border, tr[f"B_{a}"], tr[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
-           for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
-    return {"j": j, "xs": clamp(xl), "xe": clamp(xr), **num, **held}
+    # the row engine clamps the span and picks the track (its first clock, not this one's)
+    return {"j": j, "xl": xl, "xr": xr, **{k: tr[k] for k in ("E_u", "E_v", "B_u", "B_v")},
+            **held}
 
 
 def row_engine(m, w, channels, rows, row_link, space, platform=None):
@@ -129,6 +126,13 @@ def row_engine(m, w, channels, rows, row_link, space, platform=None):
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
                  row_link.ready.eq(sc.aligned & space)]
     v = {k: sc.input(k, val) for k, val in rows.items()}
+    size = 1 << w.screen_bits
+    clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
+    border = v["xl"] < 0                          # the span starts at column 0: its track
+    num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
+           for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
+    v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), sh=v["sh"], **num))  # sh: read
+    # by the shifters at the products' sums, within ii of this copy
     sc.shift = (v["sh"], w.FQ - w.R)
     fq = lambda x: x[:OPERAND].as_signed()
     u = sc.mul("u", v["nu"], v["rs"], post=fq, shifted=True)
