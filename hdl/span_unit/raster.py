@@ -60,10 +60,10 @@ class Raster(Unit):
     @property
     def latency(self):
         """From a triangle in to its first fragment out, when nothing waits: the setup, the
-        walker's load, the row engine, the row queue, the stepper's load, the output
-        register."""
+        walker's load and its row buffer, the row engine, the row queue, the stepper's load,
+        the output register."""
         setup_clocks, _, row_clocks = self.timing
-        return setup_clocks + 1 + row_clocks + 3
+        return setup_clocks + 2 + row_clocks + 3
 
     def elaborate(self, platform):
         m = Module()
@@ -94,11 +94,12 @@ class Raster(Unit):
             m.d.sync += done.eq(0)
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
-        rows = walker(m, w, ch, coef, done, src_ready, rows_in, culled)
+        rows, walking = walker(m, w, ch, coef, done, src_ready, rows_in, culled)
         rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform)
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o)
-        busy = cur | self.o.valid | rows_in.valid | re_valid | queued | running | done
+        busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | running
+                | done)
         for k in range(1, re.length):
             busy = busy | re.at(k)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]

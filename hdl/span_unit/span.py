@@ -44,9 +44,9 @@ def _step(i, r, q, d, n):
 
 
 def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
-    """Rows from triangles. ``src``: the setup's values; returns the row values: the edges'
-    columns ``xl``, ``xr`` of row ``j`` (unclamped), the numerator tracks (the left edge's
-    first pixel E, column 0 B) and the triangle's constants."""
+    """Rows from triangles. ``src``: the setup's values; returns the row values (the edges'
+    columns ``xl``, ``xr`` of row ``j``, unclamped, the numerator tracks of the left edge's
+    first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left)."""
     have = Signal()
     j, j1, jm = Signal(w.wrow), Signal(w.wrow), Signal(w.wrow)
     left_long = Signal()
@@ -60,10 +60,18 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
     tr = {k: Signal(w.wn, name=f"w_{k}") for k in
           ("E_u", "E_v", "B_u", "B_v", "s0_u", "s0_v", "s1_u", "s1_v", "e1_u", "e1_v",
            "t0_u", "t0_v", "t1_u", "t1_v", "bs_u", "bs_v")}
-    accept = have & out_link.ready
+    # A row goes into a one-row buffer when it is empty (``full``, a register), so every
+    # enable here comes from registers. The next triangle loads once the buffer's row (which
+    # reads ``held``) has gone; with a row every ``ii`` >= 3 clocks that costs no throughput.
+    full = Signal(name="w_full")
+    accept = have & ~full
     last, at_jm = Signal(), Signal()           # j + 1 == j1, j + 1 == jm (registered)
-    load = src_valid & (~have | (accept & last))
-    m.d.comb += [src_ready.eq(~have | (accept & last)), out_link.valid.eq(have)]
+    load = src_valid & ~have & ~full
+    m.d.comb += [src_ready.eq(~have & ~full), out_link.valid.eq(full)]
+    with m.If(accept):
+        m.d.sync += full.eq(1)
+    with m.Elif(out_link.ready):
+        m.d.sync += full.eq(0)
 
     def init(e):     # the walker's remainder i den - num from the setup's floor remainder
         return {"i": src[f"{e}_i"], "r": src[f"{e}_n"] - 1 - src[f"{e}_r"],
@@ -105,11 +113,14 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
             with m.Else():
                 m.d.sync += tr[f"E_{a}"].eq(Mux(carry, tr[f"E_{a}"] + tr[f"s1_{a}"],   # both
                                                 tr[f"E_{a}"] + tr[f"s0_{a}"]))  # sums, then pick
-    xl = Mux(left_long, edge["l"]["i"], edge["s"]["i"])
-    xr = Mux(left_long, edge["s"]["i"], edge["l"]["i"])
+    row = {"j": j, "xl": Mux(left_long, edge["l"]["i"], edge["s"]["i"]),
+           "xr": Mux(left_long, edge["s"]["i"], edge["l"]["i"]),
+           **{k: tr[k] for k in ("E_u", "E_v", "B_u", "B_v")}}
+    buf = {k: Signal.like(x, name=f"wb_{k}") for k, x in row.items()}
+    with m.If(accept):
+        m.d.sync += [buf[k].eq(x) for k, x in row.items()]
     # the row engine clamps the span and picks the track (its first clock, not this one's)
-    return {"j": j, "xl": xl, "xr": xr, **{k: tr[k] for k in ("E_u", "E_v", "B_u", "B_v")},
-            **held}
+    return {**buf, **held}, have
 
 
 def row_engine(m, w, channels, rows, row_link, space, platform=None):
