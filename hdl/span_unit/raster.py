@@ -88,13 +88,11 @@ class Raster(Unit):
             m.d.sync += running.eq(1)
         with m.Elif(last):
             m.d.sync += running.eq(0)
-        with m.If(last):
-            m.d.sync += done.eq(1)
-        with m.Elif(src_ready):
-            m.d.sync += done.eq(0)
+        done_n = last | (done & ~src_ready)
+        m.d.sync += done.eq(done_n)
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
-        rows, walking = walker(m, w, ch, coef, done, src_ready, rows_in, culled)
+        rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled)
         rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform)
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o)

@@ -43,10 +43,11 @@ def _step(i, r, q, d, n):
     return Mux(rr < 0, i + q + 1, i + q), Mux(rr < 0, rr + n, rr)
 
 
-def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
+def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     """Rows from triangles. ``src``: the setup's values; returns the row values (the edges'
     columns ``xl``, ``xr`` of row ``j``, unclamped, the numerator tracks of the left edge's
-    first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left)."""
+    first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left).
+    ``src_valid_next``: the setup's valid in the next clock (the walker registers its load)."""
     have = Signal()
     j, j1, jm = Signal(w.wrow), Signal(w.wrow), Signal(w.wrow)
     left_long = Signal()
@@ -63,23 +64,24 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
     # A row goes into a one-row buffer when it is empty (``full``, a register), so every
     # enable here comes from registers. The next triangle loads once the buffer's row (which
     # reads ``held``) has gone; with a row every ``ii`` >= 3 clocks that costs no throughput.
+    # ``load`` and ``accept`` are registers too, computed a clock early from the next state,
+    # so that each drives its hundreds of enables straight from a flop.
     full = Signal(name="w_full")
-    accept = have & ~full
+    accept, load = Signal(name="w_accept"), Signal(name="w_load")
     last, at_jm = Signal(), Signal()           # j + 1 == j1, j + 1 == jm (registered)
-    load = src_valid & ~have & ~full
+    rows = ~src["cull"] & (src["j0"] < src["j1"])
+    have_n = Mux(load, rows, have & ~(accept & last))
+    full_n = accept | (full & ~out_link.ready)
+    m.d.sync += [have.eq(have_n), full.eq(full_n), accept.eq(have_n & ~full_n),
+                 load.eq(src_valid_next & ~have_n & ~full_n)]
     m.d.comb += [src_ready.eq(~have & ~full), out_link.valid.eq(full)]
-    with m.If(accept):
-        m.d.sync += full.eq(1)
-    with m.Elif(out_link.ready):
-        m.d.sync += full.eq(0)
 
     def init(e):     # the walker's remainder i den - num from the setup's floor remainder
         return {"i": src[f"{e}_i"], "r": src[f"{e}_n"] - 1 - src[f"{e}_r"],
                 "q": src[f"{e}_q"], "d": src[f"{e}_d"], "n": src[f"{e}_n"]}
 
     with m.If(load):
-        rows = ~src["cull"] & (src["j0"] < src["j1"])
-        m.d.sync += [have.eq(rows), j.eq(src["j0"]), j1.eq(src["j1"]), jm.eq(src["jm"]),
+        m.d.sync += [j.eq(src["j0"]), j1.eq(src["j1"]), jm.eq(src["jm"]),
                      left_long.eq(src["left_long"]), last.eq(src["j0"] + 1 == src["j1"]),
                      at_jm.eq(src["j0"] + 1 == src["jm"])]
         m.d.sync += [held[k].eq(src[k]) for k in keep]
@@ -94,8 +96,6 @@ def walker(m, w, channels, src, src_valid, src_ready, out_link, culled):
             m.d.sync += culled.eq(culled + 1)
     with m.Elif(accept):
         m.d.sync += [j.eq(j + 1), last.eq(j + 2 == j1), at_jm.eq(j + 2 == jm)]
-        with m.If(last):
-            m.d.sync += have.eq(0)
         li, lr = _step(*(edge["l"][k] for k in "irqdn"))
         m.d.sync += [edge["l"]["i"].eq(li), edge["l"]["r"].eq(lr)]
         si, sr = _step(*(edge["s"][k] for k in "irqdn"))
