@@ -20,7 +20,7 @@ Four parts, each a stream stage with backpressure:
 - ``stepper``: one fragment per clock, two additions per quadratic channel per pixel:
   Phi += d, d += 2A (one for a linear channel, whose 2A is 0).
 """
-from amaranth.hdl import Cat, Const, Mux, Signal
+from amaranth.hdl import Cat, Const, Mux, Signal, signed
 from amaranth.lib.fifo import SyncFIFO
 
 from ..sched import OPERAND, Schedule
@@ -38,9 +38,10 @@ class Link:
 
 
 def _step(i, r, q, d, n):
-    """One row of an edge DDA: (i + q, r - d), carrying once when r - d < 0."""
-    rr = r - d
-    return Mux(rr < 0, i + q + 1, i + q), Mux(rr < 0, rr + n, rr)
+    """One row of an edge DDA, with the remainder held as ``r - d`` and ``n - d`` beside it, so
+    the carry is a register's sign bit: (i + q + carry, r - d + n if carry else r - d)."""
+    carry = r[-1]
+    return i + q + carry, Mux(carry, r + n, r - d)
 
 
 def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
@@ -56,7 +57,8 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     held = {k: Signal.like(src[k], name=f"w_{k}") for k in keep}
     edge = {}
     for e in ("l", "s", "t"):
-        edge[e] = {k: Signal.like(src[f"{e}_{k}"], name=f"w_{e}_{k}") for k in "irqdn"}
+        edge[e] = {k: Signal.like(src[f"{e}_{k}"], name=f"w_{e}_{k}") for k in "iqdn"}
+        edge[e]["r"] = Signal(signed(len(src[f"{e}_n"]) + 1), name=f"w_{e}_r")   # r - d
     # numerator tracks: the left edge's first pixel (E), column 0 (B); their steps
     tr = {k: Signal(w.wn, name=f"w_{k}") for k in
           ("E_u", "E_v", "B_u", "B_v", "s0_u", "s0_v", "s1_u", "s1_v", "e1_u", "e1_v",
@@ -76,9 +78,10 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
                  load.eq(src_valid_next & ~have_n & ~full_n)]
     m.d.comb += [src_ready.eq(~have & ~full), out_link.valid.eq(full)]
 
-    def init(e):     # the walker's remainder i den - num from the setup's floor remainder
-        return {"i": src[f"{e}_i"], "r": src[f"{e}_n"] - 1 - src[f"{e}_r"],
-                "q": src[f"{e}_q"], "d": src[f"{e}_d"], "n": src[f"{e}_n"]}
+    def init(e):     # the walker's remainder i den - num from the setup's floor remainder,
+        # held less d (and n as n - d): see _step
+        return {"i": src[f"{e}_i"], "r": src[f"{e}_n"] - 1 - src[f"{e}_r"] - src[f"{e}_d"],
+                "q": src[f"{e}_q"], "d": src[f"{e}_d"], "n": src[f"{e}_n"] - src[f"{e}_d"]}
 
     with m.If(load):
         m.d.sync += [j.eq(src["j0"]), j1.eq(src["j1"]), jm.eq(src["jm"]),
@@ -99,7 +102,7 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
         li, lr = _step(*(edge["l"][k] for k in "irqdn"))
         m.d.sync += [edge["l"]["i"].eq(li), edge["l"]["r"].eq(lr)]
         si, sr = _step(*(edge["s"][k] for k in "irqdn"))
-        carry = Mux(left_long, edge["l"]["r"] < edge["l"]["d"], edge["s"]["r"] < edge["s"]["d"])
+        carry = Mux(left_long, edge["l"]["r"][-1], edge["s"]["r"][-1])     # r < d
         switch = ~left_long & at_jm
         with m.If(at_jm):
             m.d.sync += [edge["s"][k].eq(edge["t"][k]) for k in "irqdn"]
