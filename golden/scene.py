@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hdl.scene import METHODS, ScenePipeline
+from hdl.scene import BUMPS as BUMPS_BUILT, MAX_TEXTURE, METHODS, ScenePipeline
 from hdl.setup_unit.formats import EDGE, VALUE, coord
 from hdl.shade_unit.formats import COEF, RGB
 
-from . import fenney, raster as raster_model, shade
+from . import bump as bumps, fenney, raster as raster_model, shade
 
 __all__ = ["SceneError", "load", "parse", "prepare", "model", "reference", "DEFAULTS"]
 
@@ -145,9 +145,18 @@ def parse(data, name="scene"):
         raise SceneError("camera.target: must differ from camera.eye")
     if not np.linalg.norm(np.cross(f, cam["up"])) > 1e-9 * np.linalg.norm(f):
         raise SceneError("camera.up: must not be parallel to the view direction")
-    if scene["bump"]["method"] != "none":
-        raise SceneError(f"bump.method: {scene['bump']['method']!r} is not rendered yet "
-                         f"(bump scenes are issue 11); use \"none\"")
+    bump = scene["bump"]
+    if bump["method"] not in BUMPS_BUILT:
+        raise SceneError(f"bump.method: {bump['method']!r} is not rendered yet (bump scenes "
+                         f"are issue 11); use one of {', '.join(BUMPS_BUILT)}")
+    if bump["method"] != "none":
+        if scene["shading"]["method"] == "phong":
+            raise SceneError(f"shading.method: phong interpolates the normal, which "
+                             f"bump.method = {bump['method']} replaces; use none of them "
+                             f"together")
+        if bump["size"] & (bump["size"] - 1) or bump["size"] > MAX_TEXTURE:
+            raise SceneError(f"bump.size: must be a power of two up to {MAX_TEXTURE} (the "
+                             f"texture ROM wraps by its address bits), not {bump['size']}")
     n = 1 + (3 if scene["shading"]["method"] == "phong" else
              len(scene["lights"]) * (2 if scene["shading"]["specular"] else 1))
     if n > 8:
@@ -275,6 +284,7 @@ def prepare(scene):
                 shininess=mat["shininess"])
     if sh["power"] == "fenney" and sh["specular"]:
         pipe["concentration"] = fenney_concentration(mat["shininess"])
+    bump = _bump(scene, drawn, Ls, Hs, pipe) if scene["bump"]["method"] != "none" else None
     spec = ScenePipeline.spec(**pipe)
     vert = {"depth": zmin / zc, "nx": N[:, 0], "ny": N[:, 1], "nz": N[:, 2]}
     for j, (L, Hv) in enumerate(zip(Ls, Hs)):
@@ -289,7 +299,11 @@ def prepare(scene):
         inputs[name] = np.minimum(_raw((dots - 1) / 2, EDGE), 0)
     for ch, (name, _) in enumerate(spec.channels):
         for c in range(3):
-            inputs[f"v{ch}_{c}"] = _raw(vert[name][drawn[:, c]], VALUE)
+            inputs[f"v{ch}_{c}"] = (_raw(bump["st"][:, c, "st".index(name)], VALUE)
+                                    if name in ("s", "t") else
+                                    _raw(vert[name][drawn[:, c]], VALUE))
+    if bump:
+        inputs.update(bump["constants"])
     # uniforms: L and H (phong), and the colour coefficients
     uni = {}
     for j, (L, Hv) in enumerate(zip(Ls, Hs)):
@@ -306,7 +320,60 @@ def prepare(scene):
             "uniforms": uni, "size": (W, H),
             "triangles": {"in": len(tris), "culled": int((~keep).sum()), "drawn": len(drawn)},
             "float": {"sx": sx[drawn], "sy": sy[drawn], "inv_z": zmin / zc[drawn],
-                      "N": N[drawn], "L": Ls, "H": Hs}}
+                      "N": N[drawn], "L": Ls, "H": Hs}, "bump": bump}
+
+
+def _bump(scene, drawn, Ls, Hs, pipe):
+    """fenney_polar's inputs (seed 004, first embodiment), and what its model and the
+    reference need; sets the pipeline's bump parameters in ``pipe``.
+
+    - Texture coordinates per triangle (tiles): a vertex's (s, t) is taken within half a
+      period of the first vertex's (so a triangle across the mesh's seam does not run back
+      over the whole texture), then every vertex is shifted by the same whole tiles, so that
+      the least lies in [0, 1): the texture repeats every tile, so the shift changes nothing
+      but keeps the values in the raster's [-2, 2). A triangle may span less than one tile.
+    - The triangle's tangent frame: the mean of its vertices' frames, made orthonormal (N, T
+      against N, B = N x T). L and H in it as elevation T_L (degrees above the surface
+      plane) and rotation Q from the tangent; k1 = 0, k2 = sin T_L, k3 = cos T_L (h = 1,
+      eq 1-4), each * 255, and Q in turns * 256. A light below the surface's horizon is
+      taken at T_L = 0: the patent's 8-bit k2 is unsigned (docs/bump.md)."""
+    b = scene["bump"]
+    h = bumps.height_map(b["map"], b["size"])
+    size = h.shape[0]
+    if h.shape[0] != h.shape[1] or size & (size - 1) or size > MAX_TEXTURE:
+        raise SceneError(f"bump.map: {b['map']!r} is {h.shape[1]} x {h.shape[0]} texels; a "
+                         f"texture ROM needs a square power of two up to {MAX_TEXTURE}")
+    pipe.update(bump=b["method"], bump_map=b["map"], bump_size=size, bump_depth=b["depth"])
+    period = np.array(b["repeat"], float)
+    st = bumps.texcoords(scene)[drawn]                                   # (n, 3, 2)
+    st = st[:, :1] + np.mod(st - st[:, :1] + period / 2, period) - period / 2
+    st -= np.floor(st.min(axis=1, keepdims=True))
+    span = st.max(axis=1) - st.min(axis=1)
+    if len(span) and span.max() >= 1.0 - VALUE.lsb:
+        k = int(np.argmax(span.max(axis=1)))
+        raise SceneError(f"bump.repeat: a triangle spans {span.max():.3g} tiles of the bump "
+                         f"map (along {'st'[int(np.argmax(span[k]))]}); the raster carries "
+                         f"texture coordinates in [-2, 2), so a triangle may span less than "
+                         f"one tile: use more mesh.segments or a smaller repeat")
+    frames = [f[drawn] for f in bumps.frames(scene)]                      # (n, 3, 3) each
+    Nt = _unit(frames[2].sum(1))
+    Tt = frames[0].sum(1)
+    Tt = _unit(Tt - np.einsum("ij,ij->i", Tt, Nt)[:, None] * Nt)
+    Bt = np.cross(Nt, Tt)
+    consts = {}
+    lanes = ScenePipeline.spec(**pipe).polar_lanes
+    for t, k in lanes:
+        v = bumps.to_tangent((Ls if t == "l" else Hs)[k], Tt, Bt, Nt)
+        elev = np.arcsin(np.clip(v[:, 2], 0.0, 1.0))
+        rot = np.arctan2(v[:, 1], v[:, 0])
+        consts[f"{t}{k}_k1"] = np.zeros(len(v), np.int64)
+        consts[f"{t}{k}_k2"] = np.rint(255 * np.sin(elev)).astype(np.int64)
+        consts[f"{t}{k}_k3"] = np.rint(255 * np.cos(elev)).astype(np.int64)
+        consts[f"{t}{k}_q"] = np.rint(rot / (2 * np.pi) * 256).astype(np.int64) % 256
+    normals = bumps.tangent_normals(h, b["depth"])
+    S, R = bumps.sr_texels(normals)
+    return {"st": st, "constants": consts, "lanes": lanes, "S": S, "R": R, "normals": normals,
+            "frames": frames, "size": size}
 
 
 def fenney_concentration(n):
@@ -367,6 +434,8 @@ def model(prep):
     ch = {name: frag[f"v{k}"] for k, (name, _) in enumerate(spec.channels)}
     uni = prep["uniforms"]
     lights = range(q["lights"])
+    if prep["bump"]:
+        ch.update(polar_model(prep, frag["tri"], ch["s"], ch["t"]))
     if q["method"] == "phong":
         inp = {k: np.rint(ch[k] * 2 ** VALUE.frac_bits) for k in ("nx", "ny", "nz")}
         inp.update({k: np.full(len(frag["x"]), v) for k, v in uni.items()})
@@ -391,6 +460,29 @@ def model(prep):
     return img, cov, len(frag["x"])
 
 
+def texel_index(value, size):
+    """The texel a texture coordinate (tiles, the raster's value) falls in, wrapping: the
+    top log2(size) fraction bits of its raw value, as the ROM's address takes them."""
+    raw = np.rint(np.asarray(value) * 2 ** VALUE.frac_bits).astype(np.int64)
+    return (raw >> (VALUE.frac_bits - (size.bit_length() - 1))) & (size - 1)
+
+
+def polar_model(prep, tri, s, t, offset=0):
+    """fenney_polar per fragment (``golden.fenney.polar_float``, rounded): the nearest S/R
+    texel at (s, t), each lane's per-triangle constants; d and s (N.L and N.H per light) as
+    the pipeline widens the intensity, in values. ``offset``: added to every intensity
+    before it is clamped (the tests' bound on the RTL's rounding)."""
+    b = prep["bump"]
+    i_s, i_t = texel_index(s, b["size"]), texel_index(t, b["size"])
+    out = {}
+    for lane, k in b["lanes"]:
+        c = {n: prep["inputs"][f"{lane}{k}_{n}"][tri] for n in ("k1", "k2", "k3", "q")}
+        i = np.clip(np.rint(fenney.polar_float({"s": b["S"][i_t, i_s], "r": b["R"][i_t, i_s],
+                                                **c})) + offset, 0, 255).astype(np.int64)
+        out[f"{'d' if lane == 'l' else 's'}{k}"] = ((i << 6) | (i >> 2)) * VALUE.lsb
+    return out
+
+
 def reference(prep):
     """Per-pixel Phong in float64, exact power: each covered pixel's normal interpolated
     (affine in screen space) from the exact vertex normals at the exact projected vertices,
@@ -408,6 +500,16 @@ def reference(prep):
     w = np.stack([1 - b1 - b2, b1, b2], -1)
     n = (w[..., None] * fl["N"][tri]).sum(1)
     n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+    b = prep["bump"]
+    if b:     # the texel's exact normal, in the pixel's interpolated tangent frame
+        st = (w[..., None] * b["st"][tri]).sum(1)
+        ij = np.floor(np.mod(st, 1.0) * b["size"]).astype(np.int64)
+        nt = b["normals"][ij[:, 1], ij[:, 0]]
+        T, B = ((w[..., None] * f[tri]).sum(1) for f in b["frames"][:2])
+        T = T - np.einsum("ij,ij->i", T, n)[:, None] * n
+        T = T / np.linalg.norm(T, axis=-1, keepdims=True)
+        B = np.cross(n, T)
+        n = nt[:, :1] * T + nt[:, 1:2] * B + nt[:, 2:] * n
     d = [n @ L for L in fl["L"]]
     p = [np.maximum(0, n @ Hv) ** scene["material"]["shininess"] if q["specular"]
          else np.zeros(len(tri)) for Hv in fl["H"]]

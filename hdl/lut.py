@@ -161,7 +161,8 @@ def read_roms(p, reads):
             lut = pair[0][1].lut
             stored = np.asarray(lut.contents, np.int64)
             raw = stored & ((1 << lut.fmt.width) - 1)            # two's complement bits
-            step = slice_width(len(stored))
+            # deeper than one RAM (a texture): one memory, which Yosys cascades itself
+            step = slice_width(len(stored)) if len(stored) <= 16384 else lut.fmt.width
             name = p.unique("_".join(r.name for _, r in pair))
             mems = []
             for k, lo in enumerate(range(0, lut.fmt.width, step)):

@@ -7,17 +7,30 @@
               -> power (specular: power_table, or fenney_power with the fitted concentration)
               -> colour -> fragments (tri, x, y, depth, r, g, b)
 
+    bump = "fenney_polar" (seed 004, first embodiment):
+    triangles -> raster (depth, and the texture coordinates s, t, linear)
+       `-> per-triangle constants (k1, k2, k3, Q of L and of H, per light) in a queue beside
+           the raster, met again by the fragments of their triangle (``_triangle_queue``)
+              -> texture ROM (S/R texels, nearest, wrapping) -> fenney_polar (FIG. 3, one lane
+                 per light and vector, the texel's sin S and cos S shared)
+              -> power (of the H lanes) -> colour -> fragments
+
 The per-fragment units share one pipeline (one enable), each in a submodule named after it.
 Lights and material colours are uniforms: ports ``u_<field>`` that a host sets before it
 streams triangles. The depth test and the framebuffer are not here: they model external memory
 (a 256 x 256 frame with depth is 2.6 Mbit, more than the 1 Mbit of block RAM of an ECP5-25F),
 and the renderer (``sim/render.py``) keeps them.
 """
-from amaranth.hdl import Const, Module, Mux
+import functools
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal
+from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import Out
 
-from .fixed import Field
+from .fixed import Field, u
+from .illum_unit.fenney_polar import polar_lanes
 from .illum_unit.fenney_power import power_lanes as fenney_lanes
+from .lut import build_lut, rom
 from .setup_unit.formats import MODES, VALUE, triangle_fields
 from .shade_unit.colour import colour_lanes
 from .shade_unit.formats import LEVEL, RGB, colour_fields, light_fields
@@ -26,10 +39,30 @@ from .shade_unit.power import power_lanes
 from .span_unit.raster import Raster
 from .unit import Pipeline, Unit
 
-__all__ = ["ScenePipeline", "METHODS"]
+__all__ = ["ScenePipeline", "METHODS", "BUMPS", "texture_lut", "TRI_QUEUE"]
 
 METHODS = MODES + ("phong",)
+BUMPS = ("none", "fenney_polar")
 MAX_CHANNELS = Raster.RANGES["channels"][1]
+TEXEL = u(16)                 # a texel as stored: fenney_polar's S in bits 15:8, R in 7:0
+K8 = u(8)                     # k1, k2, k3 (k * 255) and Q (turns * 256): the patent's 8 bits
+TRI_QUEUE = 16                # triangles whose constants wait beside the raster (see below)
+TRI_TAG = 5                   # low bits of the triangle index kept with them: 2**5 > 16
+MAX_TEXTURE = 1024            # texels per side of a texture ROM (20 address bits)
+
+
+@functools.lru_cache(maxsize=4)
+def texture_lut(bump_map, bump_size, bump_depth):
+    """The texture ROM of ``fenney_polar``: S/R texels, row t after row t - 1, each row along
+    s (``golden.bump`` derives the normals and encodes them, as it does for the models)."""
+    from golden import bump as maps
+    h = maps.height_map(bump_map, bump_size)
+    if h.shape != (bump_size, bump_size):
+        raise ValueError(f"bump_map {bump_map!r} is {h.shape[1]} x {h.shape[0]} texels, "
+                         f"not bump_size = {bump_size} square")
+    s, r = maps.sr_texels(maps.tangent_normals(h, bump_depth))
+    texels = ((s << 8) | r).ravel()
+    return build_lut(lambda a: texels[a.astype(int)], 2 * (bump_size.bit_length() - 1), TEXEL)
 
 
 class ScenePipeline(Unit):
@@ -37,14 +70,25 @@ class ScenePipeline(Unit):
     DOC = "A scene's pipeline: raster -> (phong) -> (power) -> colour, fragments out"
     PARAMS = {"screen_bits": 8, "sub_bits": 4, "method": "xshading", "lights": 1,
               "specular": True, "power": "table", "shininess": 32.0, "mant_bits": 6,
-              "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2}
+              "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
+              "bump": "none", "bump_map": "bricks", "bump_size": 256, "bump_depth": 1.0,
+              "trig_bits": 10}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
               "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
               "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
-              "rsqrt_iters": (1, 3)}
+              "rsqrt_iters": (1, 3), "bump": BUMPS, "bump_map": None,
+              "bump_size": (16, MAX_TEXTURE), "bump_depth": (0.0, 1e9), "trig_bits": (4, 16)}
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, **q):
+        if q["bump"] != "none":
+            size = q["bump_size"]
+            if size & (size - 1):
+                raise ValueError(f"bump_size must be a power of two (the texture coordinates "
+                                 f"wrap by their bits), not {size}")
+            if q["method"] == "phong":
+                raise ValueError("bump = fenney_polar shades from its texels: method must not "
+                                 "be phong")
         n = len(self.channels)
         if n > MAX_CHANNELS:
             raise ValueError(f"{q['lights']} lights with specular need {n} raster channels "
@@ -55,6 +99,8 @@ class ScenePipeline(Unit):
     def channels(self):
         """The raster's channels: ``(name, mode)``, depth first."""
         q = self.params
+        if q["bump"] != "none":
+            return [("depth", "linear"), ("s", "linear"), ("t", "linear")]
         if q["method"] == "phong":
             return [("depth", "linear")] + [(f"n{a}", "linear") for a in "xyz"]
         return [("depth", "linear")] + [(f.name, q["method"]) for f in
@@ -67,7 +113,15 @@ class ScenePipeline(Unit):
                                channels=len(self.channels),
                                modes=",".join(m for _, m in self.channels), recip=q["recip"],
                                recip_iters=q["recip_iters"]),
-                f"shading.method = {q['method']}")]
+                f"shading.method = {q['method']}" if q["bump"] == "none" else
+                f"bump.method = {q['bump']}: depth and texture coordinates, linear")]
+        if q["bump"] != "none":
+            out.append(("texture", dict(bump_map=q["bump_map"], bump_size=q["bump_size"],
+                                        bump_depth=q["bump_depth"]),
+                        f"bump.map = {q['bump_map']}: S/R texels, nearest"))
+            out.append(("fenney_polar", dict(trig_bits=q["trig_bits"]),
+                        f"bump.method = fenney_polar: {len(self.polar_lanes)} lanes (L"
+                        f"{' and H' if q['specular'] else ''} per light)"))
         if q["method"] == "phong":
             out.append(("phong", dict(lights=q["lights"], specular=q["specular"],
                                       rsqrt_iters=q["rsqrt_iters"]),
@@ -85,13 +139,34 @@ class ScenePipeline(Unit):
         return out
 
     @property
+    def polar_lanes(self):
+        """fenney_polar's lanes: ``(vector, light)``, L per light and, with specular, H."""
+        q = self.params
+        return [(t, k) for k in range(q["lights"]) for t in ("l", "h")
+                if q["specular"] or t == "l"]
+
+    @property
+    def triangle_constants(self):
+        """Per-triangle constants that bypass the raster: k1, k2, k3 and Q of each lane."""
+        return [Field(f"{t}{k}_{c}", K8) for t, k in self.polar_lanes
+                for c in ("k1", "k2", "k3", "q")] if self.params["bump"] != "none" else []
+
+    def part_latency(self, name, params):
+        """A part's stages in this pipeline: a unit's latency, or (the texture ROM, and
+        fenney_polar's lanes, whose power unit is the pipeline's power part) their own."""
+        from .units import UNITS
+        own = {"texture": 2, "fenney_polar": 6}
+        return own[name] if name in own else UNITS[name].spec(**params).latency
+
+    @property
     def raster(self):
         return Raster.spec(**self.parts()[0][1])
 
     @property
     def inputs(self):
         q = self.params
-        return triangle_fields(q["screen_bits"], q["sub_bits"], len(self.channels))
+        return (triangle_fields(q["screen_bits"], q["sub_bits"], len(self.channels))
+                + self.triangle_constants)
 
     @property
     def uniforms(self):
@@ -109,8 +184,7 @@ class ScenePipeline(Unit):
 
     @property
     def shading_latency(self):
-        from .units import UNITS
-        return sum(UNITS[name].spec(**params).latency for name, params, _ in self.parts()[1:])
+        return sum(self.part_latency(name, params) for name, params, _ in self.parts()[1:])
 
     @property
     def latency(self):
@@ -121,17 +195,40 @@ class ScenePipeline(Unit):
         q = self.params
         m = Module()
         m.submodules.raster = raster = Raster(**self.parts()[0][1])
-        m.d.comb += [raster.i.valid.eq(self.i.valid), self.i.ready.eq(raster.i.ready),
-                     raster.i.payload.eq(self.i.payload)]
-        p = Pipeline(m, raster.o, self.o)
+        m.d.comb += [raster.i.payload[f.name].eq(self.i.payload[f.name])
+                     for f in raster.inputs]
+        if self.triangle_constants:
+            frags, const = _triangle_queue(m, self.i, raster, self.triangle_constants)
+        else:
+            m.d.comb += [raster.i.valid.eq(self.i.valid), self.i.ready.eq(raster.i.ready)]
+            frags, const = raster.o, {}
+        p = Pipeline(m, frags, self.o)
         frag = raster.o.payload
-        v = {"tri": frag.tri, "x": frag.x, "y": frag.y}
+        v = {"tri": frag.tri, "x": frag.x, "y": frag.y, **const}
         v.update({name: frag[f"v{k}"] for k, (name, _) in enumerate(self.channels)})
         uni = {f.name: getattr(self, f"u_{f.name}") for f in self.uniforms}
         lights = range(q["lights"])
         for name, params, _ in self.parts()[1:]:
             with p.part(name):
-                if name == "phong":
+                if name == "texture":
+                    lut = texture_lut(**params)
+                    b = params["bump_size"].bit_length() - 1          # wrap: the fraction's
+                    top = VALUE.frac_bits                             # top b bits
+                    addr = Cat(v.pop("s")[top - b:top], v.pop("t")[top - b:top])
+                    v = p.stage(p.stage(v, _texel=rom(lut, addr, "texels")))
+                elif name == "fenney_polar":
+                    texel = v.pop("_texel")
+                    v.update(_S=texel[8:16], _R=texel[:8])
+                    lanes = [tuple(f"{t}{k}_{c}" for c in ("k1", "k2", "k3", "q"))
+                             + (f"_i{t}{k}", None) for t, k in self.polar_lanes]
+                    v = polar_lanes(p, v, "_S", "_R", lanes, q["trig_bits"])
+                    for t, k in self.polar_lanes:
+                        # N.L (d) and N.H (s) as values: i / 255 by bit replication,
+                        # (i << 6) | (i >> 2), within 2**-14 (s >> 4 is then the unit's X)
+                        i = v.pop(f"_i{t}{k}")
+                        v[f"{'d' if t == 'l' else 's'}{k}"] = \
+                            Cat(i[2:8], i, Const(0, 2)).as_signed()
+                elif name == "phong":
                     spec = Phong.spec(**params)
                     v = phong_lanes(p, {**v, **{k: uni[k] for k in
                                                 [f.name for f in spec.inputs[3:]]}},
@@ -162,3 +259,41 @@ def units_in(design):
     from amaranth.hdl import Fragment
     frag = Fragment.get(design, None)
     return sorted(name for _, name, *_ in frag.subfragments)
+
+
+class _Stream:
+    """A stream's handshake (the fragments that met their triangle's constants)."""
+
+    def __init__(self):
+        self.valid, self.ready = Signal(), Signal()
+
+
+def _triangle_queue(m, i, raster, fields):
+    """Constants fixed for a triangle, beside the raster rather than through it (the patent's
+    per-polygon K1, K2, K3 and Q): a triangle goes in only when both the raster and a
+    ``TRI_QUEUE``-deep queue take it; its constants enter the queue with the low ``TRI_TAG``
+    bits of its index. A fragment goes on when the head's tag is its triangle's; a head
+    whose tag differs belongs to a triangle that is done (or culled, or covered no pixel):
+    it is dropped, one a clock, while the fragment waits. Fragments come in triangle order
+    and the queue holds every triangle between the head and the raster's newest, fewer than
+    2**TRI_TAG, so equal tags mean the same triangle. Returns the fragments' handshake and
+    the constants (the head's, registered in the queue)."""
+    width = TRI_TAG + sum(f.fmt.width for f in fields)
+    m.submodules.tri_queue = fifo = SyncFIFOBuffered(width=width, depth=TRI_QUEUE)
+    tag = Signal(TRI_TAG)
+    take = i.valid & raster.i.ready & fifo.w_rdy
+    m.d.comb += [raster.i.valid.eq(i.valid & fifo.w_rdy), i.ready.eq(raster.i.ready & fifo.w_rdy),
+                 fifo.w_en.eq(take),
+                 fifo.w_data.eq(Cat(tag, *(i.payload[f.name] for f in fields)))]
+    with m.If(take):
+        m.d.sync += tag.eq(tag + 1)
+    frags = _Stream()
+    meets = fifo.r_rdy & (fifo.r_data[:TRI_TAG] == raster.o.payload.tri[:TRI_TAG])
+    m.d.comb += [frags.valid.eq(raster.o.valid & meets),
+                 raster.o.ready.eq(frags.ready & meets),
+                 fifo.r_en.eq(raster.o.valid & fifo.r_rdy & ~meets)]
+    const, at = {}, TRI_TAG
+    for f in fields:
+        const[f.name] = fifo.r_data[at:at + f.fmt.width]
+        at += f.fmt.width
+    return frags, const

@@ -64,6 +64,8 @@ def check_param(name, value, default, allowed, per_channel=False):
         return check_float(name, value, *allowed)
     if not isinstance(value, str):
         raise TypeError(f"{name} must be a string, not {value!r}")
+    if allowed is None:                    # a free string (a file name, a map's name)
+        return value
     parts = [v.strip() for v in value.split(",")] if per_channel else [value]
     for part in parts:
         if part not in allowed:
@@ -79,6 +81,8 @@ def param_range(default, allowed, per_channel=False):
         return {"choices": [False, True]}
     if isinstance(default, (int, float)):
         return {"min": allowed[0], "max": allowed[1]}
+    if allowed is None:
+        return {"string": True}
     out = {"choices": list(allowed)}
     if per_channel:
         out["per_channel"] = "a comma-separated list, one per channel (one name applies to all)"

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 
 from golden import scene as S
-from hdl.units import make_unit
 
 from .verilog import BUILD, SCENES
 
@@ -86,13 +85,14 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     save_png(out_dir / "model.png", model)
     save_png(out_dir / "reference.png", ref)
     vs_ref = compare(rtl, cov, ref, rcov)
+    bump = scene["bump"]["method"]
     save_diff(out_dir / "diff.png", rtl, ref, cov & rcov,
-              f"{scene['name']}: {params['method']}, RTL vs reference: "
+              f"{scene['name']}: {params['method'] if bump == 'none' else bump}, RTL vs reference: "
               f"{vs_ref['psnr_db']} dB, max {vs_ref['max_abs']}")
     n = len(frags["x"])
     drawn = prep["triangles"]["drawn"]
     units = [{"name": name, "why": why, "params": p,
-              "latency": make_unit(name, spec=True, **p).latency,
+              "latency": pipe.part_latency(name, p),
               "items_in": drawn if name == "raster" else n, "items_out": n}
              for name, p, why in pipe.parts()]
     metrics = {"scene": scene["name"], "method": params["method"],

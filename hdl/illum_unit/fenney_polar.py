@@ -52,27 +52,50 @@ class FenneyPolar(Unit):
         return 6 + self.power.latency
 
     def datapath(self, p, v):
-        """The tables' outputs registered, then each multiplier alone in its stage."""
-        t = self.params["trig_bits"]
-        v = dict(v)
-        s, r, q = v.pop("s"), v.pop("r"), v.pop("q")
-        lut = self.lut
-        cos_d, neg = cos_lookup(lut, r - q, 8, "cos_d")      # subtractor 16, unit 18
-        v = p.stage({**v,
-                     "sin_s": rom(lut, 256 - s, "sin_s"),     # sin S = cos(90 - S)
-                     "cos_s": rom(lut, s, "cos_s"),
-                     "cos_d": cos_d, "neg": neg})                  # sign bit 26
-        v = p.stage(v)                                               # the tables' outputs
-        k2, k3 = v.pop("k2"), v.pop("k3")
-        # k3 cos S <= 255 * 2**t: t + 8 bits (one MULT18X18D port at the default t = 10)
-        v = p.stage(v, m12=k2 * v.pop("sin_s"), m14=(k3 * v.pop("cos_s"))[:t + 8])
-        v = p.stage(v, m20=v.pop("m14") * v.pop("cos_d"),
-                    a22=(v.pop("k1") << (2 * t)) + (v.pop("m12") << t))
-        m20, a22 = v.pop("m20"), v.pop("a22")
-        v = p.stage(v, total=Mux(v.pop("neg"), a22 - m20, a22 + m20))  # add/subtract unit 24
-        s11 = ((v.pop("total") + (1 << (2 * t - 1))) >> (2 * t))[:11].as_signed()
-        i8 = Mux(s11 < 0, 0, Mux(s11 > 255, 255, s11))[:8]          # clamp 28
-        v = p.stage({**v, "intensity": i8, "x": (i8 << 2) | (i8 >> 6)})
+        v = polar_lanes(p, v, "s", "r", [("k1", "k2", "k3", "q", "intensity", "x")],
+                        self.params["trig_bits"])
         v = self.power.datapath(p, v)                                # power unit 30
         v["shade"] = v.pop("p")
         return v
+
+
+def polar_lanes(p, v, s, r, lanes, trig_bits):
+    """Eq 3 for one texel (``s``, ``r`` keys) against several lights side by side (5 stages):
+    ``lanes`` of ``(k1, k2, k3, q, intensity, x)`` keys, each giving the clamped 8-bit
+    intensity and the power unit's 10-bit X (``x`` None: not wanted). The texel's sin S and
+    cos S are read once for every lane; each lane has its own R - Q, its three multipliers
+    and its adders. The tables' outputs are registered, then each multiplier is alone in
+    its stage. ``s``, ``r`` and the lanes' constants are consumed."""
+    t = trig_bits
+    v = dict(v)
+    lut = quarter_cos_lut(t)
+    s, r = v.pop(s), v.pop(r)
+    new = {"_sin_s": rom(lut, 256 - s, "sin_s"),                    # sin S = cos(90 - S)
+           "_cos_s": rom(lut, s, "cos_s")}
+    for k, (_, _, _, q, _, _) in enumerate(lanes):
+        cos_d, neg = cos_lookup(lut, r - v.pop(q), 8, f"cos_d{k}")   # subtractor 16, unit 18
+        new.update({f"_cos_d{k}": cos_d, f"_neg{k}": neg})           # sign bit 26
+    v = p.stage(v, **new)
+    v = p.stage(v)                                                   # the tables' outputs
+    sin_s, cos_s = v.pop("_sin_s"), v.pop("_cos_s")
+    n = range(len(lanes))
+    # k3 cos S <= 255 * 2**t: t + 8 bits (one MULT18X18D port at the default t = 10)
+    v = p.stage(v, **{f"_m12_{k}": v.pop(k2) * sin_s for k, (_, k2, _, _, _, _) in
+                      enumerate(lanes)},
+                **{f"_m14_{k}": (v.pop(k3) * cos_s)[:t + 8] for k, (_, _, k3, _, _, _) in
+                   enumerate(lanes)})
+    v = p.stage(v, **{f"_m20_{k}": v.pop(f"_m14_{k}") * v.pop(f"_cos_d{k}") for k in n},
+                **{f"_a22_{k}": (v.pop(k1) << (2 * t)) + (v.pop(f"_m12_{k}") << t)
+                   for k, (k1, _, _, _, _, _) in enumerate(lanes)})
+    v = p.stage(v, **{f"_total{k}": Mux(v.pop(f"_neg{k}"), v[f"_a22_{k}"] - v[f"_m20_{k}"],
+                                        v[f"_a22_{k}"] + v[f"_m20_{k}"]) for k in n})  # unit 24
+    for k in n:
+        v.pop(f"_a22_{k}"), v.pop(f"_m20_{k}")
+    out = {}
+    for k, (_, _, _, _, key, x) in enumerate(lanes):
+        s11 = ((v.pop(f"_total{k}") + (1 << (2 * t - 1))) >> (2 * t))[:11].as_signed()
+        i8 = Mux(s11 < 0, 0, Mux(s11 > 255, 255, s11))[:8]          # clamp 28
+        out[key] = i8
+        if x is not None:
+            out[x] = (i8 << 2) | (i8 >> 6)
+    return p.stage(v, **out)

@@ -111,12 +111,20 @@ class Setup:
         x = [v.pop(f"x{k}") for k in range(3)]
         y = [v.pop(f"y{k}") for k in range(3)]
 
-        def lt(a, b):     # vertex a before vertex b
-            later = (x[a] < x[b]) if a > b else (x[a] <= x[b])
-            return (y[a] < y[b]) | ((y[a] == y[b]) & later)
-        before = sc.lets(**{f"lt{a}{b}": lt(a, b) for a in range(3) for b in range(3) if a != b})
-        rank = [sum((before[f"lt{o}{k}"] for o in range(3) if o != k), Const(0, 2))
-                for k in range(3)]
+        # Vertex a before b (a < b): y_a < y_b, or equal y and x_a <= x_b (the index breaks
+        # ties); b before a is the complement. The compares are registered alone, next to
+        # their carry chains, and the ranks from them a clock later.
+        pairs = ((0, 1), (0, 2), (1, 2))
+        cmp = sc.lets(**{k: val for a, b in pairs for k, val in
+                         ((f"ylt{a}{b}", y[a] < y[b]), (f"yeq{a}{b}", y[a] == y[b]),
+                          (f"xle{a}{b}", x[a] <= x[b]))})
+        lt = {}
+        for a, b in pairs:
+            lt[a, b] = cmp[f"ylt{a}{b}"] | (cmp[f"yeq{a}{b}"] & cmp[f"xle{a}{b}"])
+            lt[b, a] = ~lt[a, b]
+        rank = sc.lets(**{f"rank{k}": sum((lt[o, k] for o in range(3) if o != k), Const(0, 2))
+                          for k in range(3)})
+        rank = [rank[f"rank{k}"] for k in range(3)]
 
         def pick(slot, vals):
             out = vals[2]
