@@ -427,18 +427,32 @@ def model(prep):
     """The float model of the scene's method with the RTL's formats: the raster's float model
     (golden.raster) from the same raw inputs, the shading units' models, the quantised
     uniforms, the same depth test. Returns (image, covered, fragments)."""
-    scene, spec, q = prep["scene"], prep["pipeline"], prep["params"]
+    frag, ch = model_fragments(prep)
+    if prep["bump"]:
+        ch.update(polar_model(prep, frag["tri"], ch["s"], ch["t"]))
+    img, cov = framebuffer(prep["size"], frag["x"], frag["y"], ch["depth"],
+                           shade_fragments(prep, ch), prep["scene"]["image"]["background"])
+    return img, cov, len(frag["x"])
+
+
+def model_fragments(prep):
+    """The raster's float model on the scene: its fragments, and the channels by name."""
+    spec, q = prep["pipeline"], prep["params"]
     frag = raster_model.run(prep["inputs"], screen_bits=q["screen_bits"],
                             sub_bits=q["sub_bits"], channels=len(spec.channels),
                             modes=",".join(m for _, m in spec.channels))
-    ch = {name: frag[f"v{k}"] for k, (name, _) in enumerate(spec.channels)}
-    uni = prep["uniforms"]
+    return frag, {name: frag[f"v{k}"] for k, (name, _) in enumerate(spec.channels)}
+
+
+def shade_fragments(prep, ch):
+    """The per-fragment units' models after the raster (and the bump unit): phong, the power,
+    colour. ``ch``: values by name (d and s per light, or the normal). Returns rgb (n, 3)."""
+    q, uni = prep["params"], prep["uniforms"]
+    ch = dict(ch)
     lights = range(q["lights"])
-    if prep["bump"]:
-        ch.update(polar_model(prep, frag["tri"], ch["s"], ch["t"]))
     if q["method"] == "phong":
         inp = {k: np.rint(ch[k] * 2 ** VALUE.frac_bits) for k in ("nx", "ny", "nz")}
-        inp.update({k: np.full(len(frag["x"]), v) for k, v in uni.items()})
+        inp.update({k: np.full(len(ch["nx"]), v) for k, v in uni.items()})
         out, _ = shade.phong(inp, lights=q["lights"], specular=q["specular"])
         ch.update({k: v * VALUE.lsb for k, v in out.items()})
     if q["specular"]:
@@ -454,10 +468,7 @@ def model(prep):
     inp.update({f"p{j}": ch[f"p{j}"] for j in lights if q["specular"]})
     inp.update(uni)
     rgb = shade.colour(inp, lights=q["lights"], specular=q["specular"])
-    rgb = np.stack([rgb[c] for c in RGB], -1).astype(np.uint8)
-    img, cov = framebuffer(prep["size"], frag["x"], frag["y"], ch["depth"], rgb,
-                           scene["image"]["background"])
-    return img, cov, len(frag["x"])
+    return np.stack([rgb[c] for c in RGB], -1).astype(np.uint8)
 
 
 def texel_index(value, size):
@@ -467,19 +478,22 @@ def texel_index(value, size):
     return (raw >> (VALUE.frac_bits - (size.bit_length() - 1))) & (size - 1)
 
 
-def polar_model(prep, tri, s, t, offset=0):
+def polar_model(prep, tri, s, t, offset=None):
     """fenney_polar per fragment (``golden.fenney.polar_float``, rounded): the nearest S/R
     texel at (s, t), each lane's per-triangle constants; d and s (N.L and N.H per light) as
-    the pipeline widens the intensity, in values. ``offset``: added to every intensity
-    before it is clamped (the tests' bound on the RTL's rounding)."""
+    the pipeline widens the intensity, in values. ``offset``: ``{key: n}`` added to a lane's
+    intensity before it is clamped (the tests' bound on the RTL's rounding)."""
+    offset = offset or {}
     b = prep["bump"]
     i_s, i_t = texel_index(s, b["size"]), texel_index(t, b["size"])
     out = {}
     for lane, k in b["lanes"]:
         c = {n: prep["inputs"][f"{lane}{k}_{n}"][tri] for n in ("k1", "k2", "k3", "q")}
+        key = f"{'d' if lane == 'l' else 's'}{k}"
         i = np.clip(np.rint(fenney.polar_float({"s": b["S"][i_t, i_s], "r": b["R"][i_t, i_s],
-                                                **c})) + offset, 0, 255).astype(np.int64)
-        out[f"{'d' if lane == 'l' else 's'}{k}"] = ((i << 6) | (i >> 2)) * VALUE.lsb
+                                                **c})) + offset.get(key, 0), 0, 255)
+        i = i.astype(np.int64)
+        out[key] = ((i << 6) | (i >> 2)) * VALUE.lsb
     return out
 
 
