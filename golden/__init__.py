@@ -16,7 +16,7 @@ from typing import Callable
 
 import numpy as np
 
-from hdl.setup_unit.formats import EDGE, VALUE
+from hdl.setup_unit.formats import EDGE, VALUE, edge_names, parse_groups
 
 from . import angular, fenney, raster, shade
 
@@ -306,7 +306,11 @@ def _raster_run(inp, **params):
     return {k: (v / VALUE.lsb if k.startswith("v") else v) for k, v in out.items()}
 
 
-def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, **_):
+def _groups(channels, groups="0"):
+    return max(parse_groups(groups, channels)) + 1
+
+
+def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, groups="0", **_):
     """math-notes §5's setup and span cases, as triangles (raw sub-pixel coordinates)."""
     S, W = 1 << sub_bits, 1 << screen_bits
     c = S // 2                                   # a pixel centre's offset
@@ -334,8 +338,9 @@ def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, **_):
     # edge constants: normals 0, 90 and 180 deg apart and between (e = (cos - 1) / 2)
     e = (np.cos(np.radians([0, 30, 90, 120, 180, 45, 60, 90, 135, 10, 170, 100, 90, 20])) - 1) / 2
     raw = np.clip(np.round(e * 2 ** 15), EDGE.min, 0).astype(np.int64)
-    for k, name in enumerate(("e01", "e02", "e12")):
-        out[name] = np.roll(raw, k)[:n]
+    for g in range(_groups(channels, groups)):           # each group's constants differ
+        for k, name in enumerate(edge_names(g)):
+            out[name] = np.roll(raw, k + 5 * g)[:n]
     vals = np.array([16384, -16384, 0, 8192, 16383, -7000, 12000, 3000, -16384, 9000, 16384,
                      -2000, 5000, 100, 16000], np.int64)
     for ch in range(channels):
@@ -344,7 +349,8 @@ def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, **_):
     return out, list(tris)
 
 
-def random_triangles(rng, n, screen_bits=10, sub_bits=4, channels=2, size=None, **_):
+def random_triangles(rng, n, screen_bits=10, sub_bits=4, channels=2, size=None, groups="0",
+                     **_):
     """Random triangles mostly on screen (some off it), values in [-1, 1], e in [-1, 0]."""
     S, W = 1 << sub_bits, 1 << screen_bits
     size = W if size is None else size
@@ -352,8 +358,9 @@ def random_triangles(rng, n, screen_bits=10, sub_bits=4, channels=2, size=None, 
     extent = (size * S * rng.random((n, 1, 1)) ** 2).astype(np.int64) + 1
     pts = np.clip(centre + (rng.random((n, 3, 2)) * 2 - 1) * extent, -W * S, 2 * W * S - 1).astype(np.int64)
     out = {f"{a}{k}": pts[:, k, i] for k in range(3) for i, a in enumerate("xy")}
-    for name in ("e01", "e02", "e12"):
-        out[name] = rng.integers(EDGE.min, 1, n)
+    for g in range(_groups(channels, groups)):
+        for name in edge_names(g):
+            out[name] = rng.integers(EDGE.min, 1, n)
     for ch in range(channels):
         for k in range(3):
             out[f"v{ch}_{k}"] = rng.integers(-16384, 16385, n)

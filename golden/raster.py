@@ -12,7 +12,7 @@ inputs the RTL gets, saturated to the value format like the RTL.
 """
 import numpy as np
 
-from hdl.setup_unit.formats import EDGE, VALUE, parse_modes
+from hdl.setup_unit.formats import EDGE, VALUE, edge_names, parse_groups, parse_modes
 
 from . import quadratic as q
 
@@ -88,38 +88,46 @@ _EDGE_OF = {(0, 1): "e01", (1, 0): "e01", (0, 2): "e02", (2, 0): "e02", (1, 2): 
             (2, 1): "e12"}
 
 
-def sorted_triangles(inputs, channels, sub_bits):
+def sorted_triangles(inputs, channels, sub_bits, groups=1):
     """Sort each triangle's vertices (by y, then x), as the setup unit does; returns the order,
-    the top vertex, x1 y1 x2 y2 (pixels), the sorted values per channel and the edge constants
-    (e12, e13, e23) in sorted labels."""
+    the top vertex, x1 y1 x2 y2 (pixels), the sorted values per channel and, per group, the
+    edge constants (e12, e13, e23) in sorted labels."""
     x, y = _vertices(inputs)
     order = np.lexsort((x, y), axis=-1)
     xs, ys = np.take_along_axis(x, order, -1), np.take_along_axis(y, order, -1)
     scale = 2.0 ** -sub_bits
     rel = [(xs[:, k] - xs[:, 0]) * scale for k in (1, 2)], [(ys[:, k] - ys[:, 0]) * scale
                                                             for k in (1, 2)]
-    edges = {n: np.asarray(inputs[n], np.int64) * EDGE.lsb for n in ("e01", "e02", "e12")}
-    e = []
-    for a, b in ((0, 1), (0, 2), (1, 2)):
-        names = np.array([_EDGE_OF[(int(i), int(j))] for i, j in zip(order[:, a], order[:, b])])
-        e.append(np.select([names == "e01", names == "e02"], [edges["e01"], edges["e02"]],
-                           edges["e12"]))
+    es = []
+    for g in range(groups):
+        names = edge_names(g)
+        edges = {n: np.asarray(inputs[m], np.int64) * EDGE.lsb
+                 for n, m in zip(("e01", "e02", "e12"), names)}
+        e = []
+        for a, b in ((0, 1), (0, 2), (1, 2)):
+            pair = np.array([_EDGE_OF[(int(i), int(j))]
+                             for i, j in zip(order[:, a], order[:, b])])
+            e.append(np.select([pair == "e01", pair == "e02"], [edges["e01"], edges["e02"]],
+                               edges["e12"]))
+        es.append(e)
     vals = []
     for ch in range(channels):
         v = np.stack([np.asarray(inputs[f"v{ch}_{k}"], np.int64) for k in range(3)], -1)
         vals.append(np.take_along_axis(v, order, -1) * VALUE.lsb)
     return dict(x0=xs[:, 0] * scale, y0=ys[:, 0] * scale, x1=rel[0][0], y1=rel[1][0],
-                x2=rel[0][1], y2=rel[1][1], values=vals, e=e)
+                x2=rel[0][1], y2=rel[1][1], values=vals, e=es[0], groups=es)
 
 
-def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", **_):
+def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", groups="0", **_):
     """Fragments of every triangle: ``tri x y`` and ``v{k}`` (reals, saturated to the value
-    range), in the order the RTL emits them (by triangle, row, column)."""
+    range), in the order the RTL emits them (by triangle, row, column); each channel with its
+    group's edge constants."""
     modes = parse_modes(modes, channels)
+    groups = parse_groups(groups, channels)
     x, y = _vertices(inputs)
     tri, px, py = coverage(x, y, sub_bits, screen_bits)
     out = {"tri": tri, "x": px, "y": py}
-    st = sorted_triangles(inputs, channels, sub_bits)
+    st = sorted_triangles(inputs, channels, sub_bits, max(groups) + 1)
     X = px + 0.5 - st["x0"][tri]
     Y = py + 0.5 - st["y0"][tri]
     g = {k: st[k][tri] for k in ("x1", "y1", "x2", "y2")}
@@ -128,7 +136,7 @@ def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", **_):
     lo, hi = VALUE.min * VALUE.lsb, VALUE.max * VALUE.lsb
     for ch, mode in enumerate(modes):
         I = [st["values"][ch][:, k] for k in range(3)]
-        uv = channel_uv(mode, I, st["e"])
+        uv = channel_uv(mode, I, st["groups"][groups[ch]])
         out[f"v{ch}"] = np.clip(q.eval_uv(uv[tri], u, v), lo, hi)
     return out
 

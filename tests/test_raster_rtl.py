@@ -91,6 +91,23 @@ def test_modes_and_reciprocals_on_amaranth(params):
     check(inputs, out, p)
 
 
+@pytest.mark.parametrize("simulator,name", list(per_simulator(["raster"], only=("verilator",))))
+def test_edge_constant_groups(simulator, name):
+    """Channels in three groups, each with its own per-edge constants (a vector's components
+    share theirs, seed 000 section 2): every group's constants differ on every triangle, so a
+    channel that took another group's would leave the 1-LSB bound."""
+    params = {**SMALL, "channels": 4, "modes": "xshading,exact,xshading,exact",
+              "groups": "0,1,1,2"}
+    p = make_unit("raster", spec=True, **params).params
+    assert [f.name for f in make_unit("raster", spec=True, **params).inputs][6:15] == \
+        ["e01", "e02", "e12", "e01_1", "e02_1", "e12_1", "e01_2", "e02_2", "e12_2"]
+    hard, _ = raster_hard_cases(**p)
+    extra = random_triangles(np.random.default_rng(7), 40, **p)
+    inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
+    out, _ = stream("raster", inputs, simulator, params)
+    check(inputs, out, p)
+
+
 def test_back_to_back_triangles_one_channel():
     """One channel: the row engine takes a row every 5 clocks, so a row of the next triangle
     (another Omega, another shift) starts while the last row of this one is in the shifter.
@@ -127,6 +144,8 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
                          "not 'phong'"),
     ({"recip": "magic"}, "recip must be one of 'newton', 'divide', not 'magic'"),
     ({"screen_bits": 11}, "screen_bits must be in 4..10"),      # docs/quadratic.md: widths
+    ({"channels": 3, "groups": "0,2,2"}, "groups must be numbered 0, 1, ... without gaps"),
+    ({"groups": "0,0,1"}, "groups names 3 channel(s) but channels=2"),
 ])
 def test_bad_parameters_are_named(params, message):
     with pytest.raises(ParamError, match=message.replace("(", r"\(").replace(")", r"\)")):

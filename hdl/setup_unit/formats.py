@@ -5,7 +5,9 @@
 - Channel values (vertex values in, fragment values out): ``VALUE``, s16 with 14 fraction bits,
   range [-2, 2); a fragment value outside it saturates.
 - Per-edge constants of X-shading (Ni.Nj - 1)/2: ``EDGE``, s16 with 15 fraction bits, [-1, 0]
-  for unit normals.
+  for unit normals. One set per group of channels (``groups``: the normal's for scalars, a
+  vector's own, (L'i.L'j - 1)/2, for its components, seed 000 section 2): ``e01 e02 e12`` for
+  group 0, ``e01_g e02_g e12_g`` for group g.
 - Fragment coordinates: unsigned pixel indices below the screen size.
 """
 from ..fixed import Field, s, u
@@ -19,10 +21,15 @@ def coord(screen_bits, sub_bits):
     return s(screen_bits + 2 + sub_bits, sub_bits, "px")
 
 
-def triangle_fields(screen_bits, sub_bits, channels):
+def edge_names(group):
+    """The per-edge constants of one group, by vertex pair."""
+    return tuple(f"e{p}{f'_{group}' if group else ''}" for p in ("01", "02", "12"))
+
+
+def triangle_fields(screen_bits, sub_bits, channels, groups=1):
     c = coord(screen_bits, sub_bits)
     return ([Field(f"{a}{k}", c) for k in range(3) for a in "xy"]
-            + [Field(n, EDGE) for n in ("e01", "e02", "e12")]
+            + [Field(n, EDGE) for g in range(groups) for n in edge_names(g)]
             + [Field(f"v{ch}_{k}", VALUE) for ch in range(channels) for k in range(3)])
 
 
@@ -34,6 +41,24 @@ def fragment_fields(screen_bits, channels):
 
 MODES = ("xshading", "exact", "linear")
 EXACT_G_MAX = 64.0   # exact mid-edges: 1/||Ni + Nj|| clamps here (normals within 0.9 deg of opposite)
+
+
+def parse_groups(groups, channels):
+    """``"0,0,1,1,1"`` -> a tuple, each channel's edge-constant group (one number applies to
+    all), numbered from 0 without gaps."""
+    if not isinstance(groups, str):
+        raise TypeError(f"groups must be a comma-separated string, not {groups!r}")
+    try:
+        out = tuple(int(g) for g in groups.split(","))
+    except ValueError:
+        raise ValueError(f"groups must be numbers, one per channel, not {groups!r}") from None
+    if len(out) == 1:
+        out = out * channels
+    if len(out) != channels:
+        raise ValueError(f"groups names {len(out)} channel(s) but channels={channels}")
+    if sorted(set(out)) != list(range(max(out) + 1)):
+        raise ValueError(f"groups must be numbered 0, 1, ... without gaps, not {groups!r}")
+    return out
 
 
 def parse_modes(modes, channels):

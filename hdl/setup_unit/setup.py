@@ -19,7 +19,7 @@ from amaranth.hdl import Cat, Const, Mux, signed
 from .. import arith
 from ..fixed import Field, s, u
 from ..sched import OPERAND, Schedule
-from .formats import EXACT_G_MAX, VALUE, coord, parse_modes
+from .formats import EXACT_G_MAX, VALUE, coord, edge_names, parse_groups, parse_modes
 
 RSQRT_ITERS = 2    # Newton-Raphson steps of the exact mid-edges' 1/sqrt (seed error 2**-9)
 G_FRAC = 30        # fraction bits of g = 1/||Ni + Nj|| while it is computed (27 kept)
@@ -99,10 +99,11 @@ def _saturate(value, lo, hi):
 class Setup:
     """The setup program; ``Raster`` runs it (``program``) on its own schedule."""
 
-    def __init__(self, screen_bits, sub_bits, channels, modes, recip, recip_iters):
+    def __init__(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups="0"):
         self.w = Widths(screen_bits, sub_bits)
         self.channels = channels
         self.modes = parse_modes(modes, channels)
+        self.groups = parse_groups(groups, channels)
         self.recip, self.recip_iters = recip, recip_iters
 
     def sort(self, sc, v):
@@ -132,10 +133,14 @@ class Setup:
                 hit = ~rank[k].any() if slot == 0 else rank[k] == slot   # no "x == 0": lint
                 out = Mux(hit, vals[k], out)
             return out
-        opp = [v.pop("e12"), v.pop("e02"), v.pop("e01")]        # the edge opposite vertex k
         out = {f"{n}{slot}": pick(slot, vals) for slot in range(3)
                for n, vals in (("x", x), ("y", y))}
-        out.update(e12=pick(2, opp), e13=pick(1, opp), e23=pick(0, opp))
+        for g in range(max(self.groups) + 1):
+            e01, e02, e12 = edge_names(g)
+            opp = [v.pop(e12), v.pop(e02), v.pop(e01)]          # the edge opposite vertex k
+            sfx = e01[3:]
+            out.update({f"e12{sfx}": pick(2, opp), f"e13{sfx}": pick(1, opp),
+                        f"e23{sfx}": pick(0, opp)})
         for ch in range(self.channels):
             vals = [v.pop(f"v{ch}_{k}") for k in range(3)]
             out.update({f"i{ch}_{slot}": pick(slot, vals) for slot in range(3)})
@@ -248,12 +253,15 @@ class Setup:
         x1, y1, x2, y2 = r["x1"], r["y1"], r["x2"], r["y2"]
         wn = w.wn
         mod = lambda x: x[:wn].as_signed() if len(x) > wn else x     # modulo 2**wn, signed
-        first_short = r["j0"] >= r["jm"]
-        sel = lambda k: Mux(out["left_long"], out[f"l_{k}"],
-                            Mux(first_short, out[f"t_{k}"], out[f"s_{k}"]))
+        # the first left edge's column and step: a compare, then a mux, then an add, each
+        # in its own clock (registers between, so none of them is in series with another)
+        first_short = sc.let("first_short", r["j0"] >= r["jm"])
+        sel = sc.lets(**{f"sel_{k}": Mux(out["left_long"], out[f"l_{k}"],
+                                         Mux(first_short, out[f"t_{k}"], out[f"s_{k}"]))
+                         for k in ("i", "q")})
         pos = sc.lets(X0=S // 2 - xt, Y0=S * r["j0"] + S // 2 - yt, Ym=S * r["jm"] + S // 2 - yt,
-                      Xe=S * sel("i") + S // 2 - xt, Xt=S * out["t_i"] + S // 2 - xt,
-                      qe=sel("q"), qt=out["t_q"])
+                      Xe=S * sel["sel_i"] + S // 2 - xt, Xt=S * out["t_i"] + S // 2 - xt,
+                      qe=sel["sel_q"], qt=out["t_q"])
         tr = {}
 
         def pair(name, X, Y):
@@ -282,7 +290,9 @@ class Setup:
         lut = arith.rsqrt_seed(8, FG)
         gmax = int(EXACT_G_MAX) << (FG - 3)
         g = {}
-        for e in ("e12", "e13", "e23"):
+        exact = {g for g, m in zip(self.groups, self.modes) if m == "exact"}
+        for e in (f"{e}{edge_names(g)[0][3:]}" for g in sorted(exact)
+                  for e in ("e12", "e13", "e23")):
             x = (v[e] + (1 << 15)).as_unsigned()[:17]                 # 1 + e, 15 fraction bits
             sh = Const(0, 5)                                           # even, top bit at 17/18
             for k in range(17):
@@ -308,15 +318,16 @@ class Setup:
         I1, I2, I3 = (v[f"i{ch}_{k}"] for k in range(3))
         up = w.FC - VALUE.frac_bits
         n = f"c{ch}"
+        sfx = edge_names(self.groups[ch])[0][3:]                      # its group's constants
         if mode == "linear":
             z = Const(0, 1)
             return {"a": z, "b": z, "c": z, "d": (I2 - I1) << up, "e": (I3 - I1) << up,
                     "f": I1 << up}
         sums = sc.lets(**{f"{n}_s12": I1 + I2, f"{n}_s13": I1 + I3, f"{n}_s23": I2 + I3})
         if mode == "xshading":                                        # seed 001 eq 32
-            a = sc.mul(f"{n}_a", sums[f"{n}_s12"], v["e12"])
-            b = sc.mul(f"{n}_b", sums[f"{n}_s13"], v["e13"])
-            c = a + b - sc.mul(f"{n}_c3", sums[f"{n}_s23"], v["e23"])
+            a = sc.mul(f"{n}_a", sums[f"{n}_s12"], v[f"e12{sfx}"])
+            b = sc.mul(f"{n}_b", sums[f"{n}_s13"], v[f"e13{sfx}"])
+            c = a + b - sc.mul(f"{n}_c3", sums[f"{n}_s23"], v[f"e23{sfx}"])
             return {"a": a, "b": b, "c": c, "d": ((I2 - I1) << up) - a,
                     "e": ((I3 - I1) << up) - b, "f": I1 << up}
         lo, hi = VALUE.min << up, VALUE.max << up                       # exact: eq 4-6, 16
@@ -326,8 +337,8 @@ class Setup:
             m = sc.mul(f"{n}_{name}", sums[f"{n}_{s}"], g[gk],
                        post=lambda p: (p + (1 << (shift - 1))) >> shift)
             return _saturate(m, lo, hi)
-        I12, I13, I23 = mid("m12", "s12", "g12"), mid("m13", "s13", "g13"), \
-            mid("m23", "s23", "g23")
+        I12, I13, I23 = mid("m12", "s12", f"g12{sfx}"), mid("m13", "s13", f"g13{sfx}"), \
+            mid("m23", "s23", f"g23{sfx}")
         L, M, N = I1 << up, I2 << up, I3 << up
         a, b = 2 * (L + M - 2 * I12), 2 * (L + N - 2 * I13)
         return {"a": a, "b": b, "c": 4 * (L + I23 - I13 - I12), "d": M - L - a, "e": N - L - b,

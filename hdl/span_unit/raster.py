@@ -14,7 +14,8 @@ from amaranth.hdl import Const, Fragment, Module, Signal
 from amaranth.lib.wiring import Out
 
 from ..sched import Schedule
-from ..setup_unit.formats import MODES, fragment_fields, parse_modes, triangle_fields
+from ..setup_unit.formats import (MODES, fragment_fields, parse_groups, parse_modes,
+                                   triangle_fields)
 from ..setup_unit.setup import Setup
 from ..unit import Unit
 from .span import Link, row_engine, row_queue, stepper, walker
@@ -27,25 +28,27 @@ class Raster(Unit):
     DOC = ("Triangle setup (X-shading / exact mid-edge / linear, one reciprocal) and the "
            "forward-difference span engine; many fragments per triangle")
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
-              "recip": "newton", "recip_iters": 2}
-    RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 8), "modes": MODES,
-              "recip": ("newton", "divide"), "recip_iters": (0, 3)}
-    PER_CHANNEL = ("modes",)
+              "recip": "newton", "recip_iters": 2, "groups": "0"}
+    RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
+              "recip": ("newton", "divide"), "recip_iters": (0, 3),
+              "groups": tuple(str(g) for g in range(12))}
+    PER_CHANNEL = ("modes", "groups")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
-    def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters):
+    def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups):
         parse_modes(modes, channels)
+        self.groups = max(parse_groups(groups, channels)) + 1
 
     @property
     def setup(self):
         q = self.params
         return Setup(q["screen_bits"], q["sub_bits"], q["channels"], q["modes"], q["recip"],
-                     q["recip_iters"])
+                     q["recip_iters"], q["groups"])
 
     @property
     def inputs(self):
         q = self.params
-        return triangle_fields(q["screen_bits"], q["sub_bits"], q["channels"])
+        return triangle_fields(q["screen_bits"], q["sub_bits"], q["channels"], self.groups)
 
     @property
     def outputs(self):
