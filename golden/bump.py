@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from hdl.texture_unit import weight_bits
+
 from .angular import to_polar
 from .fenney import texel_encode
 
@@ -189,3 +191,44 @@ def polar_texels(n, bits=12):
     phi, theta = to_polar(n)
     q = lambda a: np.rint(a / (2 * np.pi) * (1 << bits)).astype(np.int64) % (1 << bits)
     return q(phi), q(theta)
+
+
+# ---- texel fetch (hdl/texture_unit: the same definitions) -------------------------------------
+
+
+def fetch(codes, raw_s, raw_t, filter="nearest"):
+    """An 8-bit code map (size x size, row t, column s) at texture coordinates given as the
+    raster's raw values (tiles, 14 fraction bits), wrapping: the nearest texel, or the
+    bilinear filter of hdl/texture_unit/texture.py, bit for bit (integers, round half up)."""
+    size = codes.shape[0]
+    b = size.bit_length() - 1
+    raw_s, raw_t = (np.asarray(r, np.int64) for r in (raw_s, raw_t))
+    if filter == "nearest":
+        return codes[(raw_t >> (14 - b)) & (size - 1), (raw_s >> (14 - b)) & (size - 1)]
+    F = weight_bits(b)
+    u = [(r - (1 << (13 - b))) & ((1 << 14) - 1) for r in (raw_s, raw_t)]
+    i0 = [x >> (14 - b) for x in u]
+    f = [(x >> (14 - b - F)) & ((1 << F) - 1) for x in u]
+    i1 = [(i + 1) & (size - 1) for i in i0]
+    c = codes.astype(np.int64)
+    rows = [c[j, i0[0]] * (1 << F) + (c[j, i1[0]] - c[j, i0[0]]) * f[0] for j in (i0[1], i1[1])]
+    r = rows[0] * (1 << F) + (rows[1] - rows[0]) * f[1]
+    return (r + (1 << (2 * F - 1))) >> (2 * F)
+
+
+def sample(normals, st, filter="nearest"):
+    """The reference's normal at exact texture coordinates (tiles, (n, 2)): the texel's, or
+    the bilinear blend of the four around it (texel centres at half-integers), normalised."""
+    size = normals.shape[0]
+    u = np.mod(st, 1.0) * size
+    if filter == "nearest":
+        i = np.floor(u).astype(np.int64) % size
+        return normals[i[:, 1], i[:, 0]]
+    u = u - 0.5
+    i0 = np.floor(u).astype(np.int64)
+    f = u - i0
+    i0, i1 = i0 % size, (i0 + 1) % size
+    ws, wt = (1 - f[:, 0], f[:, 0]), (1 - f[:, 1], f[:, 1])
+    cs, ct = (i0[:, 0], i1[:, 0]), (i0[:, 1], i1[:, 1])
+    n = sum(normals[ct[b], cs[a]] * (ws[a] * wt[b])[:, None] for a in (0, 1) for b in (0, 1))
+    return n / np.linalg.norm(n, axis=-1, keepdims=True)

@@ -24,7 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hdl.scene import BUMPS as BUMPS_BUILT, MAX_TEXTURE, METHODS, ScenePipeline
+from hdl.scene import BUMPS as BUMPS_BUILT, MAX_CHANNELS, METHODS, ScenePipeline
+from hdl.texture_unit import MAX_TEXTURE
 from hdl.setup_unit.formats import EDGE, VALUE, coord
 from hdl.shade_unit.formats import COEF, RGB
 
@@ -154,14 +155,23 @@ def parse(data, name="scene"):
             raise SceneError(f"shading.method: phong interpolates the normal, which "
                              f"bump.method = {bump['method']} replaces; use none of them "
                              f"together")
+        if bump["method"] == "fenney_polar" and bump["filter"] != "nearest":
+            raise SceneError("bump.filter: fenney_polar filters nearest only (its S/R texels "
+                             "do not interpolate across R's wrap); bilinear is for fenney_xz")
         if bump["size"] & (bump["size"] - 1) or bump["size"] > MAX_TEXTURE:
             raise SceneError(f"bump.size: must be a power of two up to {MAX_TEXTURE} (the "
                              f"texture ROM wraps by its address bits), not {bump['size']}")
-    n = 1 + (3 if scene["shading"]["method"] == "phong" else
-             len(scene["lights"]) * (2 if scene["shading"]["specular"] else 1))
-    if n > 8:
+    vectors = len(scene["lights"]) * (2 if scene["shading"]["specular"] else 1)
+    if bump["method"] == "fenney_xz":
+        n, what = 3 + 3 * vectors, "depth, s, t and L', H' per light"
+    elif bump["method"] == "fenney_polar":
+        n, what = 3, "depth, s, t"
+    else:
+        n = 1 + (3 if scene["shading"]["method"] == "phong" else vectors)
+        what = "depth and N.L, N.H per light"
+    if n > MAX_CHANNELS:
         raise SceneError(f"lights: {len(scene['lights'])} lights need {n} raster channels "
-                         f"(depth and N.L, N.H per light); the raster has at most 8")
+                         f"({what}); the raster has at most {MAX_CHANNELS}")
     return scene
 
 
@@ -299,9 +309,13 @@ def prepare(scene):
         inputs[name] = np.minimum(_raw((dots - 1) / 2, EDGE), 0)
     for ch, (name, _) in enumerate(spec.channels):
         for c in range(3):
-            inputs[f"v{ch}_{c}"] = (_raw(bump["st"][:, c, "st".index(name)], VALUE)
-                                    if name in ("s", "t") else
-                                    _raw(vert[name][drawn[:, c]], VALUE))
+            if name in ("s", "t"):
+                val = bump["st"][:, c, "st".index(name)]
+            elif bump and name[:-1] in bump.get("vectors", {}):      # a vector's component
+                val = bump["vectors"][name[:-1]][:, c, "xyz".index(name[-1])]
+            else:
+                val = vert[name][drawn[:, c]]
+            inputs[f"v{ch}_{c}"] = _raw(val, VALUE)
     if bump:
         inputs.update(bump["constants"])
     # uniforms: L and H (phong), and the colour coefficients
@@ -343,7 +357,8 @@ def _bump(scene, drawn, Ls, Hs, pipe):
     if h.shape[0] != h.shape[1] or size & (size - 1) or size > MAX_TEXTURE:
         raise SceneError(f"bump.map: {b['map']!r} is {h.shape[1]} x {h.shape[0]} texels; a "
                          f"texture ROM needs a square power of two up to {MAX_TEXTURE}")
-    pipe.update(bump=b["method"], bump_map=b["map"], bump_size=size, bump_depth=b["depth"])
+    pipe.update(bump=b["method"], bump_map=b["map"], bump_size=size, bump_depth=b["depth"],
+                filter=b["filter"])
     period = np.array(b["repeat"], float)
     st = bumps.texcoords(scene)[drawn]                                   # (n, 3, 2)
     st = st[:, :1] + np.mod(st - st[:, :1] + period / 2, period) - period / 2
@@ -361,7 +376,25 @@ def _bump(scene, drawn, Ls, Hs, pipe):
     Tt = _unit(Tt - np.einsum("ij,ij->i", Tt, Nt)[:, None] * Nt)
     Bt = np.cross(Nt, Tt)
     consts = {}
-    lanes = ScenePipeline.spec(**pipe).polar_lanes
+    lanes = ScenePipeline.spec(**pipe).lanes
+    normals = bumps.tangent_normals(h, b["depth"])
+    out = {"st": st, "constants": consts, "lanes": lanes, "normals": normals,
+           "frames": frames, "size": size, "filter": b["filter"]}
+    if b["method"] == "fenney_xz":
+        # each vertex's L' and H' in its own tangent frame (they vary over the surface), and
+        # each vector's per-edge constants (L'i.L'j - 1)/2 (seed 000 section 2)
+        out["X"], out["Z"] = bumps.xz_texels(normals)
+        out["vectors"] = {}
+        for t, k in lanes:
+            vec = np.stack([bumps.to_tangent((Ls if t == "l" else Hs)[k], *(f[:, c] for f in
+                                                                            frames))
+                            for c in range(3)], 1)[..., [0, 2, 1]]             # (n, 3, 3)
+            out["vectors"][f"{t}{k}"] = vec     # in the patent's axes: (T, N, B), y out
+            for (a, c), name in zip(((0, 1), (0, 2), (1, 2)), ("01", "02", "12")):
+                dots = np.einsum("ij,ij->i", vec[:, a], vec[:, c])
+                consts[f"e{name}_{1 + lanes.index((t, k))}"] = \
+                    np.minimum(_raw((dots - 1) / 2, EDGE), 0)
+        return out
     for t, k in lanes:
         v = bumps.to_tangent((Ls if t == "l" else Hs)[k], Tt, Bt, Nt)
         elev = np.arcsin(np.clip(v[:, 2], 0.0, 1.0))
@@ -370,10 +403,8 @@ def _bump(scene, drawn, Ls, Hs, pipe):
         consts[f"{t}{k}_k2"] = np.rint(255 * np.sin(elev)).astype(np.int64)
         consts[f"{t}{k}_k3"] = np.rint(255 * np.cos(elev)).astype(np.int64)
         consts[f"{t}{k}_q"] = np.rint(rot / (2 * np.pi) * 256).astype(np.int64) % 256
-    normals = bumps.tangent_normals(h, b["depth"])
-    S, R = bumps.sr_texels(normals)
-    return {"st": st, "constants": consts, "lanes": lanes, "S": S, "R": R, "normals": normals,
-            "frames": frames, "size": size}
+    out["S"], out["R"] = bumps.sr_texels(normals)
+    return out
 
 
 def fenney_concentration(n):
@@ -429,7 +460,7 @@ def model(prep):
     uniforms, the same depth test. Returns (image, covered, fragments)."""
     frag, ch = model_fragments(prep)
     if prep["bump"]:
-        ch.update(polar_model(prep, frag["tri"], ch["s"], ch["t"]))
+        ch.update(bump_model(prep, frag["tri"], ch))
     img, cov = framebuffer(prep["size"], frag["x"], frag["y"], ch["depth"],
                            shade_fragments(prep, ch), prep["scene"]["image"]["background"])
     return img, cov, len(frag["x"])
@@ -471,11 +502,36 @@ def shade_fragments(prep, ch):
     return np.stack([rgb[c] for c in RGB], -1).astype(np.uint8)
 
 
-def texel_index(value, size):
-    """The texel a texture coordinate (tiles, the raster's value) falls in, wrapping: the
-    top log2(size) fraction bits of its raw value, as the ROM's address takes them."""
-    raw = np.rint(np.asarray(value) * 2 ** VALUE.frac_bits).astype(np.int64)
-    return (raw >> (VALUE.frac_bits - (size.bit_length() - 1))) & (size - 1)
+def bump_model(prep, tri, ch, **bound):
+    """N.L and N.H per light (d and s, values) of the scene's bump method per fragment."""
+    if prep["params"]["bump"] == "fenney_polar":
+        return polar_model(prep, tri, ch["s"], ch["t"], bound.get("offset"))
+    return xz_model(prep, ch, **bound)
+
+
+def xz_model(prep, ch, ds=0, dt=0, dl=None, offset=None):
+    """fenney_xz per fragment: the X/Z texels fetched (``golden.bump.fetch``: nearest, or the
+    bilinear filter bit for bit) and decoded (``golden.fenney.texel_decode``), each lane's
+    interpolated vector as the patent's s8 (round(127 v), clamped to +-127, from its raw
+    value), dotted (``golden.fenney.dot_float``, h = 1, rounded to the 10-bit X); X << 4 as
+    a value. The tests' bound: ``ds``, ``dt`` added to the raw texture coordinates, ``dl``
+    ``{lane: (dx, dy, dz)}`` to a vector's raw components, ``offset`` ``{key: n}`` to X."""
+    b, lsb = prep["bump"], VALUE.lsb
+    raw = lambda v: np.rint(np.asarray(v) / lsb).astype(np.int64)
+    codes = [bumps.fetch(b[c], raw(ch["s"]) + ds, raw(ch["t"]) + dt, b["filter"])
+             for c in ("X", "Z")]
+    inp = fenney.texel_decode(*codes)
+    out = {}
+    for lane, k in b["lanes"]:
+        d = (dl or {}).get(f"{lane}{k}", (0, 0, 0))
+        for a, da in zip("xyz", d):
+            r = raw(ch[f"{lane}{k}{a}"]) + da
+            inp[f"l{a}"] = np.clip((r * 127 + (1 << 13)) >> 14, -127, 127)
+        inp["h"] = np.full(len(r), 255)
+        key = f"{'d' if lane == 'l' else 's'}{k}"
+        x = np.clip(np.rint(fenney.dot_float(inp)) + (offset or {}).get(key, 0), 0, 1023)
+        out[key] = (x.astype(np.int64) << 4) * lsb
+    return out
 
 
 def polar_model(prep, tri, s, t, offset=None):
@@ -485,12 +541,13 @@ def polar_model(prep, tri, s, t, offset=None):
     intensity before it is clamped (the tests' bound on the RTL's rounding)."""
     offset = offset or {}
     b = prep["bump"]
-    i_s, i_t = texel_index(s, b["size"]), texel_index(t, b["size"])
+    raw_s, raw_t = (np.rint(np.asarray(c) / VALUE.lsb).astype(np.int64) for c in (s, t))
+    texel = {c: bumps.fetch(b[c], raw_s, raw_t) for c in ("S", "R")}
     out = {}
     for lane, k in b["lanes"]:
         c = {n: prep["inputs"][f"{lane}{k}_{n}"][tri] for n in ("k1", "k2", "k3", "q")}
         key = f"{'d' if lane == 'l' else 's'}{k}"
-        i = np.clip(np.rint(fenney.polar_float({"s": b["S"][i_t, i_s], "r": b["R"][i_t, i_s],
+        i = np.clip(np.rint(fenney.polar_float({"s": texel["S"], "r": texel["R"],
                                                 **c})) + offset.get(key, 0), 0, 255)
         i = i.astype(np.int64)
         out[key] = ((i << 6) | (i >> 2)) * VALUE.lsb
@@ -517,8 +574,7 @@ def reference(prep):
     b = prep["bump"]
     if b:     # the texel's exact normal, in the pixel's interpolated tangent frame
         st = (w[..., None] * b["st"][tri]).sum(1)
-        ij = np.floor(np.mod(st, 1.0) * b["size"]).astype(np.int64)
-        nt = b["normals"][ij[:, 1], ij[:, 0]]
+        nt = bumps.sample(b["normals"], st, b["filter"])
         T, B = ((w[..., None] * f[tri]).sum(1) for f in b["frames"][:2])
         T = T - np.einsum("ij,ij->i", T, n)[:, None] * n
         T = T / np.linalg.norm(T, axis=-1, keepdims=True)

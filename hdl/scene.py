@@ -7,6 +7,13 @@
               -> power (specular: power_table, or fenney_power with the fitted concentration)
               -> colour -> fragments (tri, x, y, depth, r, g, b)
 
+    bump = "fenney_xz" (seed 004, second embodiment):
+    triangles -> raster (depth, s, t linear; L' and H' in the tangent frame per light, three
+                 channels each, in the scene's mode: quadratic with each vector's own
+                 per-edge constants (seed 000 section 2), or linear)
+              -> texture ROM (X/Z texels, nearest or bilinear) -> texel_decode
+              -> fenney_dot (one lane per light and vector, the texel shared) -> power -> colour
+
     bump = "fenney_polar" (seed 004, first embodiment):
     triangles -> raster (depth, and the texture coordinates s, t, linear)
        `-> per-triangle constants (k1, k2, k3, Q of L and of H, per light) in a queue beside
@@ -21,48 +28,32 @@ streams triangles. The depth test and the framebuffer are not here: they model e
 (a 256 x 256 frame with depth is 2.6 Mbit, more than the 1 Mbit of block RAM of an ECP5-25F),
 and the renderer (``sim/render.py``) keeps them.
 """
-import functools
-
 from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import Out
 
 from .fixed import Field, u
+from .illum_unit.fenney_dot import FenneyDot, dot_lanes
 from .illum_unit.fenney_polar import polar_lanes
 from .illum_unit.fenney_power import power_lanes as fenney_lanes
-from .lut import build_lut, rom
-from .setup_unit.formats import MODES, VALUE, triangle_fields
+from .illum_unit.texel_decode import TexelDecode
+from .setup_unit.formats import MODES, VALUE
 from .shade_unit.colour import colour_lanes
 from .shade_unit.formats import LEVEL, RGB, colour_fields, light_fields
 from .shade_unit.phong import Phong, phong_lanes
 from .shade_unit.power import power_lanes
 from .span_unit.raster import Raster
+from .texture_unit import FILTERS, MAX_TEXTURE, fetch
 from .unit import Pipeline, Unit
 
-__all__ = ["ScenePipeline", "METHODS", "BUMPS", "texture_lut", "TRI_QUEUE"]
+__all__ = ["ScenePipeline", "METHODS", "BUMPS", "TRI_QUEUE"]
 
 METHODS = MODES + ("phong",)
-BUMPS = ("none", "fenney_polar")
+BUMPS = ("none", "fenney_xz", "fenney_polar")
 MAX_CHANNELS = Raster.RANGES["channels"][1]
-TEXEL = u(16)                 # a texel as stored: fenney_polar's S in bits 15:8, R in 7:0
 K8 = u(8)                     # k1, k2, k3 (k * 255) and Q (turns * 256): the patent's 8 bits
 TRI_QUEUE = 16                # triangles whose constants wait beside the raster (see below)
 TRI_TAG = 5                   # low bits of the triangle index kept with them: 2**5 > 16
-MAX_TEXTURE = 1024            # texels per side of a texture ROM (20 address bits)
-
-
-@functools.lru_cache(maxsize=4)
-def texture_lut(bump_map, bump_size, bump_depth):
-    """The texture ROM of ``fenney_polar``: S/R texels, row t after row t - 1, each row along
-    s (``golden.bump`` derives the normals and encodes them, as it does for the models)."""
-    from golden import bump as maps
-    h = maps.height_map(bump_map, bump_size)
-    if h.shape != (bump_size, bump_size):
-        raise ValueError(f"bump_map {bump_map!r} is {h.shape[1]} x {h.shape[0]} texels, "
-                         f"not bump_size = {bump_size} square")
-    s, r = maps.sr_texels(maps.tangent_normals(h, bump_depth))
-    texels = ((s << 8) | r).ravel()
-    return build_lut(lambda a: texels[a.astype(int)], 2 * (bump_size.bit_length() - 1), TEXEL)
 
 
 class ScenePipeline(Unit):
@@ -72,12 +63,13 @@ class ScenePipeline(Unit):
               "specular": True, "power": "table", "shininess": 32.0, "mant_bits": 6,
               "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
               "bump": "none", "bump_map": "bricks", "bump_size": 256, "bump_depth": 1.0,
-              "trig_bits": 10}
+              "filter": "nearest", "trig_bits": 10}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
               "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
               "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "rsqrt_iters": (1, 3), "bump": BUMPS, "bump_map": None,
-              "bump_size": (16, MAX_TEXTURE), "bump_depth": (0.0, 1e9), "trig_bits": (4, 16)}
+              "bump_size": (16, MAX_TEXTURE), "bump_depth": (0.0, 1e9), "filter": FILTERS,
+              "trig_bits": (4, 16)}
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, **q):
@@ -87,12 +79,16 @@ class ScenePipeline(Unit):
                 raise ValueError(f"bump_size must be a power of two (the texture coordinates "
                                  f"wrap by their bits), not {size}")
             if q["method"] == "phong":
-                raise ValueError("bump = fenney_polar shades from its texels: method must not "
-                                 "be phong")
+                raise ValueError(f"bump = {q['bump']} shades from its texels: method must not "
+                                 f"be phong")
+            if q["bump"] == "fenney_polar" and q["filter"] != "nearest":
+                raise ValueError("bump = fenney_polar filters nearest only (S/R texels do not "
+                                 "interpolate across R's wrap)")
         n = len(self.channels)
         if n > MAX_CHANNELS:
             raise ValueError(f"{q['lights']} lights with specular need {n} raster channels "
-                             f"(depth, N.L and N.H per light); the raster has at most "
+                             f"(depth, N.L and N.H per light; or depth, s, t and three per "
+                             f"light and vector); the raster has at most "
                              f"{MAX_CHANNELS}")
 
     @property
@@ -100,7 +96,10 @@ class ScenePipeline(Unit):
         """The raster's channels: ``(name, mode)``, depth first."""
         q = self.params
         if q["bump"] != "none":
-            return [("depth", "linear"), ("s", "linear"), ("t", "linear")]
+            tex = [("depth", "linear"), ("s", "linear"), ("t", "linear")]
+            if q["bump"] == "fenney_polar":
+                return tex
+            return tex + [(f"{t}{k}{a}", q["method"]) for t, k in self.lanes for a in "xyz"]
         if q["method"] == "phong":
             return [("depth", "linear")] + [(f"n{a}", "linear") for a in "xyz"]
         return [("depth", "linear")] + [(f.name, q["method"]) for f in
@@ -109,19 +108,33 @@ class ScenePipeline(Unit):
     def parts(self):
         """The units built, each with its parameters and the scene key that calls for it."""
         q = self.params
-        out = [("raster", dict(screen_bits=q["screen_bits"], sub_bits=q["sub_bits"],
-                               channels=len(self.channels),
-                               modes=",".join(m for _, m in self.channels), recip=q["recip"],
-                               recip_iters=q["recip_iters"]),
-                f"shading.method = {q['method']}" if q["bump"] == "none" else
-                f"bump.method = {q['bump']}: depth and texture coordinates, linear")]
+        raster = dict(screen_bits=q["screen_bits"], sub_bits=q["sub_bits"],
+                      channels=len(self.channels), modes=",".join(m for _, m in self.channels),
+                      recip=q["recip"], recip_iters=q["recip_iters"])
+        vectors = f"L{' and H' if q['specular'] else ''} per light"
+        if q["bump"] == "none":
+            out = [("raster", raster, f"shading.method = {q['method']}")]
+        elif q["bump"] == "fenney_polar":
+            out = [("raster", raster, "bump.method = fenney_polar: depth and texture "
+                    "coordinates, linear")]
+        else:                     # each vector's components: a group of edge constants
+            raster["groups"] = ",".join(["0"] * 3 + [str(1 + n) for n in range(len(self.lanes))
+                                                     for _ in "xyz"])
+            out = [("raster", raster, f"bump.method = fenney_xz: depth, s, t linear; {vectors}"
+                    f" in the tangent frame, shading.method = {q['method']}")]
         if q["bump"] != "none":
-            out.append(("texture", dict(bump_map=q["bump_map"], bump_size=q["bump_size"],
-                                        bump_depth=q["bump_depth"]),
-                        f"bump.map = {q['bump_map']}: S/R texels, nearest"))
+            kind = "sr" if q["bump"] == "fenney_polar" else "xz"
+            out.append(("texture", dict(kind=kind, bump_map=q["bump_map"],
+                                        bump_size=q["bump_size"], bump_depth=q["bump_depth"],
+                                        filter=q["filter"]),
+                        f"bump.map = {q['bump_map']}: {kind.upper()} texels, {q['filter']}"))
+        if q["bump"] == "fenney_polar":
             out.append(("fenney_polar", dict(trig_bits=q["trig_bits"]),
-                        f"bump.method = fenney_polar: {len(self.polar_lanes)} lanes (L"
-                        f"{' and H' if q['specular'] else ''} per light)"))
+                        f"bump.method = fenney_polar: {len(self.lanes)} lanes ({vectors})"))
+        elif q["bump"] == "fenney_xz":
+            out.append(("texel_decode", {}, "bump.method = fenney_xz"))
+            out.append(("fenney_dot", {}, f"bump.method = fenney_xz: {len(self.lanes)} lanes "
+                        f"({vectors})"))
         if q["method"] == "phong":
             out.append(("phong", dict(lights=q["lights"], specular=q["specular"],
                                       rsqrt_iters=q["rsqrt_iters"]),
@@ -139,8 +152,8 @@ class ScenePipeline(Unit):
         return out
 
     @property
-    def polar_lanes(self):
-        """fenney_polar's lanes: ``(vector, light)``, L per light and, with specular, H."""
+    def lanes(self):
+        """A bump unit's lanes: ``(vector, light)``, L per light and, with specular, H."""
         q = self.params
         return [(t, k) for k in range(q["lights"]) for t in ("l", "h")
                 if q["specular"] or t == "l"]
@@ -148,14 +161,16 @@ class ScenePipeline(Unit):
     @property
     def triangle_constants(self):
         """Per-triangle constants that bypass the raster: k1, k2, k3 and Q of each lane."""
-        return [Field(f"{t}{k}_{c}", K8) for t, k in self.polar_lanes
-                for c in ("k1", "k2", "k3", "q")] if self.params["bump"] != "none" else []
+        return [Field(f"{t}{k}_{c}", K8) for t, k in self.lanes
+                for c in ("k1", "k2", "k3", "q")] if self.params["bump"] == "fenney_polar" \
+            else []
 
     def part_latency(self, name, params):
         """A part's stages in this pipeline: a unit's latency, or (the texture ROM, and
         fenney_polar's lanes, whose power unit is the pipeline's power part) their own."""
         from .units import UNITS
-        own = {"texture": 2, "fenney_polar": 6}
+        own = {"texture": 2 if params.get("filter") == "nearest" else 7, "fenney_polar": 6,
+               "fenney_dot": FenneyDot.spec().latency + 1}    # + the light's s8 conversion
         return own[name] if name in own else UNITS[name].spec(**params).latency
 
     @property
@@ -164,9 +179,7 @@ class ScenePipeline(Unit):
 
     @property
     def inputs(self):
-        q = self.params
-        return (triangle_fields(q["screen_bits"], q["sub_bits"], len(self.channels))
-                + self.triangle_constants)
+        return list(self.raster.inputs) + self.triangle_constants
 
     @property
     def uniforms(self):
@@ -204,30 +217,46 @@ class ScenePipeline(Unit):
             frags, const = raster.o, {}
         p = Pipeline(m, frags, self.o)
         frag = raster.o.payload
-        v = {"tri": frag.tri, "x": frag.x, "y": frag.y, **const}
+        # the pixel's coordinates ride along as px, py (the bump units' x, y, z are theirs)
+        v = {"tri": frag.tri, "px": frag.x, "py": frag.y, **const}
         v.update({name: frag[f"v{k}"] for k, (name, _) in enumerate(self.channels)})
         uni = {f.name: getattr(self, f"u_{f.name}") for f in self.uniforms}
         lights = range(q["lights"])
         for name, params, _ in self.parts()[1:]:
             with p.part(name):
                 if name == "texture":
-                    lut = texture_lut(**params)
-                    b = params["bump_size"].bit_length() - 1          # wrap: the fraction's
-                    top = VALUE.frac_bits                             # top b bits
-                    addr = Cat(v.pop("s")[top - b:top], v.pop("t")[top - b:top])
-                    v = p.stage(p.stage(v, _texel=rom(lut, addr, "texels")))
+                    v = fetch(p, v, "s", "t", **params)
                 elif name == "fenney_polar":
-                    texel = v.pop("_texel")
-                    v.update(_S=texel[8:16], _R=texel[:8])
                     lanes = [tuple(f"{t}{k}_{c}" for c in ("k1", "k2", "k3", "q"))
-                             + (f"_i{t}{k}", None) for t, k in self.polar_lanes]
-                    v = polar_lanes(p, v, "_S", "_R", lanes, q["trig_bits"])
-                    for t, k in self.polar_lanes:
+                             + (f"_i{t}{k}", None) for t, k in self.lanes]
+                    v = polar_lanes(p, v, "_hi", "_lo", lanes, q["trig_bits"])   # S, R
+                    for t, k in self.lanes:
                         # N.L (d) and N.H (s) as values: i / 255 by bit replication,
                         # (i << 6) | (i >> 2), within 2**-14 (s >> 4 is then the unit's X)
                         i = v.pop(f"_i{t}{k}")
                         v[f"{'d' if t == 'l' else 's'}{k}"] = \
                             Cat(i[2:8], i, Const(0, 2)).as_signed()
+                elif name == "texel_decode":
+                    v["texel_x"], v["texel_z"] = v.pop("_hi"), v.pop("_lo")
+                    v = TexelDecode.spec().datapath(p, v)
+                    v.pop("invalid")         # decoded by the guard's rule (docs/bump.md)
+                elif name == "fenney_dot":
+                    # the interpolated vector as the patent's s8: round(127 v), clamped
+                    conv = {}
+                    for t, k in self.lanes:
+                        for a in "xyz":
+                            c = v.pop(f"{t}{k}{a}")
+                            r = ((c << 7) - c + (1 << (VALUE.frac_bits - 1))) >> VALUE.frac_bits
+                            conv[f"_{t}{k}{a}"] = Mux(r > 127, 127, Mux(r < -127, -127, r))[:8]\
+                                .as_signed()
+                    v = p.stage(v, **conv)
+                    lanes = [tuple(f"_{t}{k}{a}" for a in "xyz") + (f"_h{t}{k}", f"_x{t}{k}")
+                             for t, k in self.lanes]
+                    v.update({f"_h{t}{k}": Const(255, 8) for t, k in self.lanes})   # h = 1
+                    v = dot_lanes(p, v, "x", "y", "z", lanes)
+                    for t, k in self.lanes:     # X / 1024 as a value: X << 4
+                        v[f"{'d' if t == 'l' else 's'}{k}"] = \
+                            Cat(Const(0, 4), v.pop(f"_x{t}{k}"), Const(0, 2)).as_signed()
                 elif name == "phong":
                     spec = Phong.spec(**params)
                     v = phong_lanes(p, {**v, **{k: uni[k] for k in
@@ -246,6 +275,7 @@ class ScenePipeline(Unit):
                     v = colour_lanes(p, {**v, **{f.name: uni[f.name] for f in
                                                  colour_fields(q["lights"], q["specular"])}},
                                      q["lights"], q["specular"])
+        v["x"], v["y"] = v.pop("px"), v.pop("py")
         p.finish(self.o, v, self.outputs, self.shading_latency, "scene: shading")
         busy = raster.busy
         for valid in p.valids:

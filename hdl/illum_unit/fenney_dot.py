@@ -71,46 +71,71 @@ class FenneyDot(Unit):
         return rsqrt_lut(self.params["rsqrt_bits"]) if self.params["normalize"] else None
 
     def datapath(self, p, v):
-        """Every multiplier alone in its stage, registered on both sides; the table's output
-        registered before it is used."""
-        v = dict(v)
-        x, y, z = v.pop("x"), v.pop("y"), v.pop("z")
-        prods = {"_px": x * v.pop("lx"), "_py": y * v.pop("ly"), "_pz": z * v.pop("lz")}
-        if self.params["normalize"]:
-            prods.update(_qx=x * x, _qy=y * y, _qz=z * z)
-        v = p.stage(v, **prods)
-        # |D| <= 256*128 + 255*128 + 256*128 = 98,176 for any inputs: s18, one multiplier port
-        new = {"dot": (v.pop("_px") + v.pop("_py") + v.pop("_pz"))[:18].as_signed()}   # D
-        if self.params["normalize"]:
-            new["n2"] = v.pop("_qx") + v.pop("_qy") + v.pop("_qz")
+        return dot_lanes(p, v, "x", "y", "z", [("lx", "ly", "lz", "h", "x")],
+                         self.params["normalize"], self.params["rsqrt_bits"])
+
+
+def dot_lanes(p, v, bx, by, bz, lanes, normalize=False, rsqrt_bits=12):
+    """(1-h) + h (b.l) for one bump vector (``bx by bz`` keys) against several lights side by
+    side: ``lanes`` of ``(lx, ly, lz, h, out)`` keys (10 stages, 12 renormalising). The
+    vector's length and its table read are shared by every lane; each lane has its own three
+    products, its weight and its divider. Every multiplier alone in its stage, registered on
+    both sides; the table's output registered before it is used. The inputs are consumed."""
+    v = dict(v)
+    x, y, z = v.pop(bx), v.pop(by), v.pop(bz)
+    n = range(len(lanes))
+    prods = {}
+    for k, (lx, ly, lz, _, _) in enumerate(lanes):
+        prods.update({f"_px{k}": x * v.pop(lx), f"_py{k}": y * v.pop(ly),
+                      f"_pz{k}": z * v.pop(lz)})
+    if normalize:
+        prods.update(_qx=x * x, _qy=y * y, _qz=z * z)
+    v = p.stage(v, **prods)
+    # |D| <= 256*128 + 255*128 + 256*128 = 98,176 for any inputs: s18, one multiplier port
+    new = {f"_dot{k}": (v.pop(f"_px{k}") + v.pop(f"_py{k}") + v.pop(f"_pz{k}"))[:18]
+           .as_signed() for k in n}                                            # D
+    if normalize:
+        new["_n2"] = v.pop("_qx") + v.pop("_qy") + v.pop("_qz")
+    v = p.stage(v, **new)
+    dq = {}
+    if normalize:
+        n2 = v.pop("_n2")
+        big = n2 >= 65536
+        n2_16 = Mux(big, n2 >> 2, n2)[:16]
+        v = p.stage(v, _big=big, _addr=n2_16 >> (16 - rsqrt_bits))
+        v = p.stage(v, _g=rom(rsqrt_lut(rsqrt_bits), v.pop("_addr"), "rsqrt"))
+        v = p.stage(v)                                                 # the table's output
+        g = v.pop("_g")
+        v = p.stage(v, **{f"_prod{k}": v.pop(f"_dot{k}") * g for k in n})
+        big = v.pop("_big")
+        for k in n:
+            prod = v.pop(f"_prod{k}")
+            dq[k] = Mux(big, (prod + (1 << 15)) >> 16, (prod + (1 << 14)) >> 15)
+    else:
+        # D * G_PLAIN by wiring and adds (G_PLAIN = 2**14 + 2**7 + 2**6 + 2): a 19-bit
+        # operand would take two chained MULT18X18Ds
+        new = {}
+        for k in n:
+            dot = v.pop(f"_dot{k}")
+            new.update({f"_a{k}": (dot << 14) + (dot << 7), f"_b{k}": (dot << 6) + (dot << 1)})
         v = p.stage(v, **new)
-        if self.params["normalize"]:
-            n2 = v.pop("n2")
-            big = n2 >= 65536
-            n2_16 = Mux(big, n2 >> 2, n2)[:16]
-            v = p.stage(v, big=big, _addr=n2_16 >> (16 - self.params["rsqrt_bits"]))
-            v = p.stage(v, g=rom(self.lut, v.pop("_addr"), "rsqrt"))
-            v = p.stage(v)                                                 # the table's output
-            v = p.stage(v, prod=v.pop("dot") * v.pop("g"))
-            big, prod = v.pop("big"), v.pop("prod")
-            dq = Mux(big, (prod + (1 << 15)) >> 16, (prod + (1 << 14)) >> 15)
-        else:
-            # D * G_PLAIN by wiring and adds (G_PLAIN = 2**14 + 2**7 + 2**6 + 2): a 19-bit
-            # operand would take two chained MULT18X18Ds
-            dot = v.pop("dot")
-            v = p.stage(v, _a=(dot << 14) + (dot << 7), _b=(dot << 6) + (dot << 1))
-            v = p.stage(v, prod=v.pop("_a") + v.pop("_b"))
-            dq = (v.pop("prod") + (1 << 14)) >> 15
-        # |d| <= |l| / 127 <= sqrt(3) (two of the table's bins' error over that): |dq| < 2**16
-        v = p.stage(v, dq=dq[:17].as_signed())                             # d * 2**14
-        h = v.pop("h")
-        v = p.stage(v, _keep=(255 - h) << D_FRAC, _hd=h * v.pop("dq"))
-        v = p.stage(v, m=v.pop("_keep") + v.pop("_hd"))                  # M
-        # round(M / 4080) as (M * K + 2**35) >> 36 with K = 0x1010101 = 257 * 65537, by wiring
-        # and adds: s = 257 M, then (s + (s >> 16) + 2**19) >> 20 (s's low 16 bits never carry)
-        m = v.pop("m")
-        v = p.stage(v, _s=m + (m << 8))
-        s = v.pop("_s")
-        v = p.stage(v, _q=(s + (s >> 16) + (1 << (DIV_SHIFT - 17))) >> (DIV_SHIFT - 16))
-        q = v.pop("_q")
-        return p.stage({**v, "x": Mux(q < 0, 0, Mux(q > 1023, 1023, q))[:10]})
+        v = p.stage(v, **{f"_prod{k}": v.pop(f"_a{k}") + v.pop(f"_b{k}") for k in n})
+        dq = {k: (v.pop(f"_prod{k}") + (1 << 14)) >> 15 for k in n}
+    # |d| <= |l| / 127 <= sqrt(3) (two of the table's bins' error over that): |dq| < 2**16
+    v = p.stage(v, **{f"_dq{k}": dq[k][:17].as_signed() for k in n})       # d * 2**14
+    new = {}
+    for k, (_, _, _, h, _) in enumerate(lanes):
+        hk = v.pop(h)
+        new.update({f"_keep{k}": (255 - hk) << D_FRAC, f"_hd{k}": hk * v.pop(f"_dq{k}")})
+    v = p.stage(v, **new)
+    v = p.stage(v, **{f"_m{k}": v.pop(f"_keep{k}") + v.pop(f"_hd{k}") for k in n})      # M
+    # round(M / 4080) as (M * K + 2**35) >> 36 with K = 0x1010101 = 257 * 65537, by wiring
+    # and adds: s = 257 M, then (s + (s >> 16) + 2**19) >> 20 (s's low 16 bits never carry)
+    v = p.stage(v, **{f"_s{k}": v[f"_m{k}"] + (v.pop(f"_m{k}") << 8) for k in n})
+    v = p.stage(v, **{f"_q{k}": (v[f"_s{k}"] + (v.pop(f"_s{k}") >> 16)
+                                 + (1 << (DIV_SHIFT - 17))) >> (DIV_SHIFT - 16) for k in n})
+    out = {}
+    for k, (_, _, _, _, key) in enumerate(lanes):
+        q = v.pop(f"_q{k}")
+        out[key] = Mux(q < 0, 0, Mux(q > 1023, 1023, q))[:10]
+    return p.stage(v, **out)
