@@ -468,10 +468,8 @@ def model(prep):
 
 def model_fragments(prep):
     """The raster's float model on the scene: its fragments, and the channels by name."""
-    spec, q = prep["pipeline"], prep["params"]
-    frag = raster_model.run(prep["inputs"], screen_bits=q["screen_bits"],
-                            sub_bits=q["sub_bits"], channels=len(spec.channels),
-                            modes=",".join(m for _, m in spec.channels))
+    spec = prep["pipeline"]
+    frag = raster_model.run(prep["inputs"], **spec.parts()[0][1])     # the raster's params
     return frag, {name: frag[f"v{k}"] for k, (name, _) in enumerate(spec.channels)}
 
 
