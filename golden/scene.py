@@ -161,6 +161,10 @@ def parse(data, name="scene"):
         if bump["size"] & (bump["size"] - 1) or bump["size"] > MAX_TEXTURE:
             raise SceneError(f"bump.size: must be a power of two up to {MAX_TEXTURE} (the "
                              f"texture ROM wraps by its address bits), not {bump['size']}")
+    most = ScenePipeline.RANGES["lights"][1]
+    if len(scene["lights"]) > most:
+        raise SceneError(f"lights: {len(scene['lights'])} lights; the pipeline shades at most "
+                         f"{most}")
     vectors = len(scene["lights"]) * (2 if scene["shading"]["specular"] else 1)
     if bump["method"] == "fenney_xz":
         n, what = 3 + 3 * vectors, "depth, s, t and L', H' per light"

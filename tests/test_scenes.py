@@ -61,7 +61,9 @@ BAD = [
     ("[camera]\neye = [0, 0, 0]", "camera.target: must differ from camera.eye"),
     ("[bump]\nmethod = \"angular\"", "bump.method: 'angular' is not rendered yet"),
     ("[image]\nwidth = 64\n[camera]\nfov_y = 180.0", "camera.fov_y: must be a finite number in 1..170"),
-    ("\n".join(["[[lights]]"] * 4), "lights: 4 lights need 9 raster channels"),
+    ("\n".join(["[[lights]]"] * 5), "lights: 5 lights; the pipeline shades at most 4"),
+    ("[bump]\nmethod = \"fenney_xz\"\n" + "\n".join(["[[lights]]"] * 2),
+     "lights: 2 lights need 15 raster channels (depth, s, t and L', H' per light)"),
 ]
 
 
