@@ -185,7 +185,9 @@ class Setup:
         # orientation, cull, |Omega| normalised: n in [2**(W-1), 2**W) and sh
         W = w.womega
         flags = sc.lets(cull=~om.any(), neg=om < 0, left_long=om > 0, mag=abs(om)[:W])
-        out.update(cull=flags["cull"], left_long=flags["left_long"])
+        out.update(cull=flags["cull"], left_long=flags["left_long"],
+                   # the walker has rows to walk: registered here, not compared on its load
+                   rows=sc.let("rows", ~flags["cull"] & (r["j0"] < r["j1"])))
         norm = sc.lets(sh=arith.leading_one(flags["mag"], W))
         norm["lz"] = sc.let("lz", W - 1 - norm["sh"], shape=range(W))
         sh = norm["sh"]

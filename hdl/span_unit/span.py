@@ -71,7 +71,7 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     full = Signal(name="w_full")
     accept, load = Signal(name="w_accept"), Signal(name="w_load")
     last, at_jm = Signal(), Signal()           # j + 1 == j1, j + 1 == jm (registered)
-    rows = ~src["cull"] & (src["j0"] < src["j1"])
+    rows = src["rows"]                         # not culled, j0 < j1 (the setup's register)
     have_n = Mux(load, rows, have & ~(accept & last))
     full_n = accept | (full & ~out_link.ready)
     m.d.sync += [have.eq(have_n), full.eq(full_n), accept.eq(have_n & ~full_n),
