@@ -25,11 +25,14 @@ from pathlib import Path
 import numpy as np
 
 from hdl.scene import BUMPS as BUMPS_BUILT, MAX_CHANNELS, METHODS, ScenePipeline
+from hdl.units import make_unit
 from hdl.texture_unit import MAX_TEXTURE
 from hdl.setup_unit.formats import EDGE, VALUE, coord
 from hdl.shade_unit.formats import COEF, RGB
 
-from . import bump as bumps, fenney, raster as raster_model, shade
+from hdl.scene import ANGLE_BITS
+
+from . import angular, bump as bumps, fenney, raster as raster_model, shade
 
 __all__ = ["SceneError", "load", "parse", "prepare", "model", "reference", "DEFAULTS"]
 
@@ -51,7 +54,7 @@ DEFAULTS = {
                 "color": [1.0, 1.0, 1.0]}],
     "shading": {"method": "xshading", "specular": True, "power": "table"},
     "bump": {"method": "none", "map": "bricks", "size": 256, "repeat": [8.0, 2.0],
-             "depth": 1.0, "filter": "nearest"},
+             "depth": 1.0, "filter": "nearest", "rotation": "paper"},
 }
 LIGHT = DEFAULTS["lights"][0]
 # Each key's kind and range: ("num", lo, hi) finite reals, ("int", lo, hi), ("vec", n, lo, hi)
@@ -75,7 +78,8 @@ RULES = {
                 "power": ("choice", ("table", "fenney"))},
     "bump": {"method": ("choice", BUMPS), "map": ("str",), "size": ("int", 16, 4096),
              "repeat": ("vec", 2, 1e-6, INF), "depth": ("num", 0.0, INF),
-             "filter": ("choice", ("nearest", "bilinear"))},
+             "filter": ("choice", ("nearest", "bilinear")),
+             "rotation": ("choice", ("paper", "exact"))},
 }
 
 
@@ -155,9 +159,13 @@ def parse(data, name="scene"):
             raise SceneError(f"shading.method: phong interpolates the normal, which "
                              f"bump.method = {bump['method']} replaces; use none of them "
                              f"together")
-        if bump["method"] == "fenney_polar" and bump["filter"] != "nearest":
-            raise SceneError("bump.filter: fenney_polar filters nearest only (its S/R texels "
-                             "do not interpolate across R's wrap); bilinear is for fenney_xz")
+        if bump["method"] in ("fenney_polar", "angular") and bump["filter"] != "nearest":
+            raise SceneError(f"bump.filter: {bump['method']} filters nearest only (its texels "
+                             f"are angles, which do not interpolate across their wrap); "
+                             f"bilinear is for fenney_xz")
+        if bump["method"] == "angular" and len(scene["lights"]) != 1:
+            raise SceneError(f"lights: bump.method = angular shades one light (its pipeline "
+                             f"rotates one L and one H), not {len(scene['lights'])}")
         if bump["size"] & (bump["size"] - 1) or bump["size"] > MAX_TEXTURE:
             raise SceneError(f"bump.size: must be a power of two up to {MAX_TEXTURE} (the "
                              f"texture ROM wraps by its address bits), not {bump['size']}")
@@ -168,8 +176,8 @@ def parse(data, name="scene"):
     vectors = len(scene["lights"]) * (2 if scene["shading"]["specular"] else 1)
     if bump["method"] == "fenney_xz":
         n, what = 3 + 3 * vectors, "depth, s, t and L', H' per light"
-    elif bump["method"] == "fenney_polar":
-        n, what = 3, "depth, s, t"
+    elif bump["method"] in ("fenney_polar", "angular"):
+        n, what = 6, "depth, s, t and angles"
     else:
         n = 1 + (3 if scene["shading"]["method"] == "phong" else vectors)
         what = "depth and N.L, N.H per light"
@@ -317,6 +325,8 @@ def prepare(scene):
                 val = bump["st"][:, c, "st".index(name)]
             elif bump and name[:-1] in bump.get("vectors", {}):      # a vector's component
                 val = bump["vectors"][name[:-1]][:, c, "xyz".index(name[-1])]
+            elif bump and name in bump.get("angles", {}):
+                val = bump["angles"][name][:, c]
             else:
                 val = vert[name][drawn[:, c]]
             inputs[f"v{ch}_{c}"] = _raw(val, VALUE)
@@ -327,6 +337,10 @@ def prepare(scene):
     for j, (L, Hv) in enumerate(zip(Ls, Hs)):
         for a in range(3):
             uni[f"l{j}{'xyz'[a]}"], uni[f"h{j}{'xyz'[a]}"] = _raw(L[a], VALUE), _raw(Hv[a], VALUE)
+    angle = lambda a: int(np.rint(a / (2 * np.pi) * (1 << ANGLE_BITS))) % (1 << ANGLE_BITS)
+    for n, v in (("l", Ls[0]), ("h", Hs[0])):            # angular: L and H in polar form
+        pv, tv = angular.to_polar(v)
+        uni[f"phi_{n}"], uni[f"theta_{n}"] = angle(pv), angle(tv)
     col = np.array(mat["color"])
     for ci, c in enumerate(RGB):
         uni[f"amb_{c}"] = _raw(mat["ambient"] * col[ci], COEF)
@@ -363,6 +377,8 @@ def _bump(scene, drawn, Ls, Hs, pipe):
                          f"texture ROM needs a square power of two up to {MAX_TEXTURE}")
     pipe.update(bump=b["method"], bump_map=b["map"], bump_size=size, bump_depth=b["depth"],
                 filter=b["filter"])
+    if b["method"] == "angular":
+        pipe["rotation"] = b["rotation"]
     period = np.array(b["repeat"], float)
     st = bumps.texcoords(scene)[drawn]                                   # (n, 3, 2)
     st = st[:, :1] + np.mod(st - st[:, :1] + period / 2, period) - period / 2
@@ -384,6 +400,32 @@ def _bump(scene, drawn, Ls, Hs, pipe):
     normals = bumps.tangent_normals(h, b["depth"])
     out = {"st": st, "constants": consts, "lanes": lanes, "normals": normals,
            "frames": frames, "size": size, "filter": b["filter"]}
+    if b["method"] == "angular":
+        # the normal's angles (seed 003: phi from x, theta from z) and the twist psi of the
+        # texture's frame about N from the rotations' frame (e_theta, e_phi, N), in turns;
+        # each unwrapped within half a turn of the first vertex's, as the texture coordinates
+        N = frames[2]
+        phi, theta = angular.to_polar(N)
+        # theta_N = 0 (the hard case): phi_N means nothing there, so each triangle takes, at
+        # such a vertex, the mean direction of its other vertices' phi_N (the normal crosses
+        # the pole along it); the twist follows from that phi
+        pole = np.sin(theta) < 1e-9
+        other = np.where(pole, 0.0, 1.0)
+        mean = np.arctan2((other * np.sin(phi)).sum(1), (other * np.cos(phi)).sum(1))
+        phi = np.where(pole, mean[:, None], phi)
+        e_t = np.stack([np.cos(theta) * np.cos(phi), np.cos(theta) * np.sin(phi),
+                        -np.sin(theta)], -1)
+        e_p = np.stack([-np.sin(phi), np.cos(phi), np.zeros_like(phi)], -1)
+        psi = np.arctan2(np.einsum("...i,...i", frames[0], e_p),
+                         np.einsum("...i,...i", frames[0], e_t))
+        turns = lambda a: a / (2 * np.pi)
+        wrap = lambda a: a[:, :1] + np.mod(a - a[:, :1] + 0.5, 1.0) - 0.5
+        out["angles"] = {"phin": wrap(turns(phi)), "thetan": turns(theta),
+                         "psi": wrap(turns(psi))}
+        for k in ("phin", "psi"):
+            out["angles"][k] -= np.floor(out["angles"][k].min(axis=1, keepdims=True))
+        out["phi"], out["theta"] = bumps.polar_texels(normals, ANGLE_BITS)
+        return out
     if b["method"] == "fenney_xz":
         # each vertex's L' and H' in its own tangent frame (they vary over the surface), and
         # each vector's per-edge constants (L'i.L'j - 1)/2 (seed 000 section 2)
@@ -489,7 +531,7 @@ def shade_fragments(prep, ch):
         out, _ = shade.phong(inp, lights=q["lights"], specular=q["specular"])
         ch.update({k: v * VALUE.lsb for k, v in out.items()})
     if q["specular"]:
-        for j in lights:
+        for j in (j for j in lights if f"p{j}" not in ch):    # angular gives p itself
             s_raw = np.rint(ch[f"s{j}"] * 2 ** VALUE.frac_bits)
             if q["power"] == "table":
                 ch[f"p{j}"] = shade.power_table(s_raw, q["shininess"], q["mant_bits"]) \
@@ -508,7 +550,39 @@ def bump_model(prep, tri, ch, **bound):
     """N.L and N.H per light (d and s, values) of the scene's bump method per fragment."""
     if prep["params"]["bump"] == "fenney_polar":
         return polar_model(prep, tri, ch["s"], ch["t"], bound.get("offset"))
+    if prep["params"]["bump"] == "angular":
+        return angular_model(prep, ch)[0]
     return xz_model(prep, ch, **bound)
+
+
+def angular_inputs(prep, ch, da=(0, 0, 0), ds=0, dt=0):
+    """bump_polar's inputs per fragment, as the pipeline forms them: the normal's angles and
+    the twist from the channels' raw values (turns: their top ANGLE_BITS fraction bits), the
+    nearest (phi, theta) texel, phi_B + psi; L and H from the uniforms. ``da``, ``ds``,
+    ``dt``: the tests' bound, added to the raw values of phi_N, theta_N, psi and s, t."""
+    b, lsb, full = prep["bump"], VALUE.lsb, 1 << ANGLE_BITS
+    raw = lambda v: np.rint(np.asarray(v) / lsb).astype(np.int64)
+    code = lambda key, d: ((raw(ch[key]) + d) >> (VALUE.frac_bits - ANGLE_BITS)) & (full - 1)
+    rs, rt = raw(ch["s"]) + ds, raw(ch["t"]) + dt
+    inp = {"phi_n": code("phin", da[0]), "theta_n": code("thetan", da[1]),
+           "phi_b": (bumps.fetch(b["phi"], rs, rt) + code("psi", da[2])) & (full - 1),
+           "theta_b": bumps.fetch(b["theta"], rs, rt)}
+    inp.update({k: np.full(len(rs), prep["uniforms"][k]) for k in
+                ("phi_l", "theta_l", "phi_h", "theta_h")})
+    return inp
+
+
+def angular_model(prep, ch, **bound):
+    """seed 003 per fragment: ``golden.angular.bump_polar_float`` (rotations paper or exact,
+    the illumination's tables), rounded to its u16 outputs; d = diffuse >> 1 (a value) and
+    p = specular >> 5 (a power), as the pipeline takes them. Returns ``(channels, float
+    outputs, the unit's bounds)``."""
+    params = make_unit("bump_polar", spec=True, **prep["pipeline"].bump_polar_params).params
+    inp = angular_inputs(prep, ch, **bound)
+    out = angular.bump_polar_float(inp, **params)
+    diffuse, specular = (np.rint(out[k]).astype(np.int64) for k in ("diffuse", "specular"))
+    return ({"d0": (diffuse >> 1) * VALUE.lsb, "p0": specular >> 5}, out,
+            angular.bump_polar_bounds(inp, **params))
 
 
 def xz_model(prep, ch, ds=0, dt=0, dl=None, offset=None):

@@ -14,6 +14,13 @@
               -> texture ROM (X/Z texels, nearest or bilinear) -> texel_decode
               -> fenney_dot (one lane per light and vector, the texel shared) -> power -> colour
 
+    bump = "angular" (seed 003):
+    triangles -> raster (depth, s, t; the normal's angles phi_N, theta_N and the twist psi
+                 of the texture's frame about N, all linear, unwrapped per triangle)
+              -> texture ROM ((phi, theta) texels, nearest) -> phi_B + psi
+              -> bump_polar (rotation of L and of H into N's frame, paper or exact; illum
+                 with its diffuse and specular tables) -> colour
+
     bump = "fenney_polar" (seed 004, first embodiment):
     triangles -> raster (depth, and the texture coordinates s, t, linear)
        `-> per-triangle constants (k1, k2, k3, Q of L and of H, per light) in a queue beside
@@ -32,9 +39,10 @@ from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import Out
 
-from .fixed import Field, u
-from .illum_unit.fenney_dot import FenneyDot, dot_lanes
+from .fixed import Field, binary_angle, u
+from .illum_unit.fenney_dot import dot_lanes
 from .illum_unit.fenney_polar import polar_lanes
+from .illum_unit.bump_polar import BumpPolar
 from .illum_unit.fenney_power import power_lanes as fenney_lanes
 from .illum_unit.texel_decode import TexelDecode
 from .setup_unit.formats import MODES, VALUE
@@ -49,7 +57,8 @@ from .unit import Pipeline, Unit
 __all__ = ["ScenePipeline", "METHODS", "BUMPS", "TRI_QUEUE"]
 
 METHODS = MODES + ("phong",)
-BUMPS = ("none", "fenney_xz", "fenney_polar")
+BUMPS = ("none", "fenney_xz", "fenney_polar", "angular")
+ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotation's default)
 MAX_CHANNELS = Raster.RANGES["channels"][1]
 K8 = u(8)                     # k1, k2, k3 (k * 255) and Q (turns * 256): the patent's 8 bits
 TRI_QUEUE = 16                # triangles whose constants wait beside the raster (see below)
@@ -63,13 +72,13 @@ class ScenePipeline(Unit):
               "specular": True, "power": "table", "shininess": 32.0, "mant_bits": 6,
               "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
               "bump": "none", "bump_map": "bricks", "bump_size": 256, "bump_depth": 1.0,
-              "filter": "nearest", "trig_bits": 10}
+              "filter": "nearest", "trig_bits": 10, "rotation": "paper"}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
               "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
               "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "rsqrt_iters": (1, 3), "bump": BUMPS, "bump_map": None,
               "bump_size": (16, MAX_TEXTURE), "bump_depth": (0.0, 1e9), "filter": FILTERS,
-              "trig_bits": (4, 16)}
+              "trig_bits": (4, 16), "rotation": ("paper", "exact")}
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, **q):
@@ -81,9 +90,12 @@ class ScenePipeline(Unit):
             if q["method"] == "phong":
                 raise ValueError(f"bump = {q['bump']} shades from its texels: method must not "
                                  f"be phong")
-            if q["bump"] == "fenney_polar" and q["filter"] != "nearest":
-                raise ValueError("bump = fenney_polar filters nearest only (S/R texels do not "
-                                 "interpolate across R's wrap)")
+            if q["bump"] in ("fenney_polar", "angular") and q["filter"] != "nearest":
+                raise ValueError(f"bump = {q['bump']} filters nearest only (its texels are "
+                                 f"angles, which do not interpolate across their wrap)")
+            if q["bump"] == "angular" and q["lights"] != 1:
+                raise ValueError("bump = angular shades one light (bump_polar rotates one L "
+                                 "and one H)")
         n = len(self.channels)
         if n > MAX_CHANNELS:
             raise ValueError(f"{q['lights']} lights with specular need {n} raster channels "
@@ -99,6 +111,8 @@ class ScenePipeline(Unit):
             tex = [("depth", "linear"), ("s", "linear"), ("t", "linear")]
             if q["bump"] == "fenney_polar":
                 return tex
+            if q["bump"] == "angular":
+                return tex + [("phin", "linear"), ("thetan", "linear"), ("psi", "linear")]
             return tex + [(f"{t}{k}{a}", q["method"]) for t, k in self.lanes for a in "xyz"]
         if q["method"] == "phong":
             return [("depth", "linear")] + [(f"n{a}", "linear") for a in "xyz"]
@@ -117,17 +131,28 @@ class ScenePipeline(Unit):
         elif q["bump"] == "fenney_polar":
             out = [("raster", raster, "bump.method = fenney_polar: depth and texture "
                     "coordinates, linear")]
+        elif q["bump"] == "angular":
+            out = [("raster", raster, "bump.method = angular: depth, texture coordinates, "
+                    "the normal's angles and the frame's twist, linear")]
         else:                     # each vector's components: a group of edge constants
             raster["groups"] = ",".join(["0"] * 3 + [str(1 + n) for n in range(len(self.lanes))
                                                      for _ in "xyz"])
             out = [("raster", raster, f"bump.method = fenney_xz: depth, s, t linear; {vectors}"
                     f" in the tangent frame, shading.method = {q['method']}")]
         if q["bump"] != "none":
-            kind = "sr" if q["bump"] == "fenney_polar" else "xz"
-            out.append(("texture", dict(kind=kind, bump_map=q["bump_map"],
-                                        bump_size=q["bump_size"], bump_depth=q["bump_depth"],
-                                        filter=q["filter"]),
-                        f"bump.map = {q['bump_map']}: {kind.upper()} texels, {q['filter']}"))
+            kind = {"fenney_polar": "sr", "fenney_xz": "xz", "angular": "polar"}[q["bump"]]
+            tex = dict(kind=kind, bump_map=q["bump_map"], bump_size=q["bump_size"],
+                       bump_depth=q["bump_depth"], filter=q["filter"])
+            if kind == "polar":
+                tex["bits"] = ANGLE_BITS
+            out.append(("texture", tex, f"bump.map = {q['bump_map']}: {kind} texels, "
+                        f"{q['filter']}"))
+        if q["bump"] == "angular":
+            out.append(("bump_polar", self.bump_polar_params, "bump.method = angular, "
+                        f"bump.rotation = {q['rotation']}: rotation x 2, illum"))
+            out.append(("colour", dict(lights=q["lights"], specular=q["specular"]),
+                        "material, lights"))
+            return out
         if q["bump"] == "fenney_polar":
             out.append(("fenney_polar", dict(trig_bits=q["trig_bits"]),
                         f"bump.method = fenney_polar: {len(self.lanes)} lanes ({vectors})"))
@@ -152,6 +177,12 @@ class ScenePipeline(Unit):
         return out
 
     @property
+    def bump_polar_params(self):
+        q = self.params
+        return dict(method=q["rotation"], angle_bits=ANGLE_BITS,
+                    shininess=max(1, min(1024, round(q["shininess"]))))
+
+    @property
     def lanes(self):
         """A bump unit's lanes: ``(vector, light)``, L per light and, with specular, H."""
         q = self.params
@@ -169,9 +200,13 @@ class ScenePipeline(Unit):
         """A part's stages in this pipeline: a unit's latency, or (the texture ROM, and
         fenney_polar's lanes, whose power unit is the pipeline's power part) their own."""
         from .units import UNITS
-        own = {"texture": 2 if params.get("filter") == "nearest" else 7, "fenney_polar": 6,
-               "fenney_dot": FenneyDot.spec().latency + 1}    # + the light's s8 conversion
-        return own[name] if name in own else UNITS[name].spec(**params).latency
+        if name == "texture":
+            return 2 if params["filter"] == "nearest" else 7
+        if name == "fenney_polar":
+            return 6
+        extra = {"fenney_dot": 1,       # the light's conversion to s8
+                 "bump_polar": 1}       # the angles from the channels, phi_B + psi
+        return UNITS[name].spec(**params).latency + extra.get(name, 0)
 
     @property
     def raster(self):
@@ -187,6 +222,9 @@ class ScenePipeline(Unit):
         vec = ([Field(f"{t}{k}{a}", VALUE) for k in range(q["lights"])
                 for t in ("l", "h") if q["specular"] or t == "l" for a in "xyz"]
                if q["method"] == "phong" else [])
+        if q["bump"] == "angular":           # L and H in polar form, world frame
+            vec = [Field(n, binary_angle(ANGLE_BITS)) for n in
+                   ("phi_l", "theta_l", "phi_h", "theta_h")]
         return vec + colour_fields(q["lights"], q["specular"])
 
     @property
@@ -217,8 +255,8 @@ class ScenePipeline(Unit):
             frags, const = raster.o, {}
         p = Pipeline(m, frags, self.o)
         frag = raster.o.payload
-        # the pixel's coordinates ride along as px, py (the bump units' x, y, z are theirs)
-        v = {"tri": frag.tri, "px": frag.x, "py": frag.y, **const}
+        # the pixel's coordinates ride along as _pix_x, _pix_y (x, y, z are the bump units')
+        v = {"tri": frag.tri, "_pix_x": frag.x, "_pix_y": frag.y, **const}
         v.update({name: frag[f"v{k}"] for k, (name, _) in enumerate(self.channels)})
         uni = {f.name: getattr(self, f"u_{f.name}") for f in self.uniforms}
         lights = range(q["lights"])
@@ -236,6 +274,19 @@ class ScenePipeline(Unit):
                         i = v.pop(f"_i{t}{k}")
                         v[f"{'d' if t == 'l' else 's'}{k}"] = \
                             Cat(i[2:8], i, Const(0, 2)).as_signed()
+                elif name == "bump_polar":
+                    top, ab = VALUE.frac_bits, ANGLE_BITS    # turns: the top fraction bits
+                    ang = lambda key: v.pop(key)[top - ab:top]
+                    theta_b, phi_b = v.pop("_hi"), v.pop("_lo")
+                    v = p.stage(v, phi_n=ang("phin"), theta_n=ang("thetan"),
+                                phi_b=(phi_b + ang("psi"))[:ab], theta_b=theta_b,
+                                **{k: uni[k] for k in ("phi_l", "theta_l", "phi_h",
+                                                       "theta_h")})
+                    v = BumpPolar.spec(**params).datapath(p, v)
+                    v.pop("dot_l"), v.pop("dot_h")
+                    # diffuse (u16, 15 fraction bits) >> 1 is a value; specular >> 5 a power
+                    v["d0"] = Cat(v.pop("diffuse")[1:], Const(0, 1)).as_signed()
+                    v["p0"] = v.pop("specular")[5:]
                 elif name == "texel_decode":
                     v["texel_x"], v["texel_z"] = v.pop("_hi"), v.pop("_lo")
                     v = TexelDecode.spec().datapath(p, v)
@@ -275,7 +326,7 @@ class ScenePipeline(Unit):
                     v = colour_lanes(p, {**v, **{f.name: uni[f.name] for f in
                                                  colour_fields(q["lights"], q["specular"])}},
                                      q["lights"], q["specular"])
-        v["x"], v["y"] = v.pop("px"), v.pop("py")
+        v["x"], v["y"] = v.pop("_pix_x"), v.pop("_pix_y")
         p.finish(self.o, v, self.outputs, self.shading_latency, "scene: shading")
         busy = raster.busy
         for valid in p.valids:

@@ -1,8 +1,8 @@
 """Texel fetch: a bump map's texels in ROM, addressed by texture coordinates that the raster
 interpolates (linear channels, ``VALUE``: tiles, 14 fraction bits), wrapping at every tile.
 
-- A texel is 16 bits: two 8-bit codes, ``hi`` in bits 15:8 and ``lo`` in bits 7:0 (S and R
-  for fenney_polar, TexelX and TexelZ for fenney_xz). The map is ``2**b`` texels a side, row t
+- A texel is two codes of ``bits`` bits each, ``hi`` above ``lo``: S and R for fenney_polar,
+  TexelX and TexelZ for fenney_xz (8 bits each), theta and phi for angular (angle bits). The map is ``2**b`` texels a side, row t
   after row t - 1, each row along s.
 - ``nearest``: the texel holding the coordinate, its index the top ``b`` fraction bits.
 - ``bilinear`` (each code filtered on its own, as the patent's texels are; defined here in
@@ -25,7 +25,6 @@ from ..fixed import u
 from ..lut import build_lut, rom
 from ..setup_unit.formats import VALUE
 
-TEXEL = u(16)
 FILTERS = ("nearest", "bilinear")
 MAX_TEXTURE = 1024            # texels a side (20 address bits)
 CODES = ("hi", "lo")
@@ -38,35 +37,41 @@ def weight_bits(b):
 
 
 @functools.lru_cache(maxsize=8)
-def texture_lut(kind, bump_map, bump_size, bump_depth, bank=None):
+def texture_lut(kind, bump_map, bump_size, bump_depth, bits=8, bank=None):
     """The texels of a bump map (``golden.bump`` derives the normals and encodes them, as it
-    does for the models): ``kind`` "sr" (S, R) or "xz" (TexelX, TexelZ); ``bank`` (a, b): only
-    the texels whose s and t have those parities."""
+    does for the models): ``kind`` "sr" (S, R), "xz" (TexelX, TexelZ) or "polar" (theta,
+    phi of ``bits`` each); ``bank`` (a, b): only the texels whose s and t have those
+    parities."""
     from golden import bump as maps
     h = maps.height_map(bump_map, bump_size)
     if h.shape != (bump_size, bump_size):
         raise ValueError(f"bump_map {bump_map!r} is {h.shape[1]} x {h.shape[0]} texels, "
                          f"not bump_size = {bump_size} square")
     n = maps.tangent_normals(h, bump_depth)
-    hi, lo = maps.sr_texels(n) if kind == "sr" else maps.xz_texels(n)
-    texels = (hi << 8) | lo
+    if kind == "polar":
+        lo, hi = maps.polar_texels(n, bits)
+    else:
+        hi, lo = maps.sr_texels(n) if kind == "sr" else maps.xz_texels(n)
+    texels = (hi << bits) | lo
     if bank is not None:
         texels = texels[bank[1]::2, bank[0]::2]
     texels = texels.ravel()
-    return build_lut(lambda a: texels[a.astype(int)], (len(texels) - 1).bit_length(), TEXEL)
+    return build_lut(lambda a: texels[a.astype(int)], (len(texels) - 1).bit_length(),
+                     u(2 * bits))
 
 
-def fetch(p, v, s, t, kind, bump_map, bump_size, bump_depth, filter):
+def fetch(p, v, s, t, kind, bump_map, bump_size, bump_depth, filter, bits=8):
     """Texel codes at the coordinates ``s``, ``t`` (keys, consumed): ``_hi`` and ``_lo``.
-    nearest: 2 stages (the ROM's read register, then its output registered); bilinear: 7."""
+    nearest: 2 stages (the ROM's read register, then its output registered); bilinear (8-bit
+    codes): 7."""
     b = bump_size.bit_length() - 1
     top = VALUE.frac_bits
     if filter == "nearest":
         addr = Cat(v.pop(s)[top - b:top], v.pop(t)[top - b:top])
-        v = p.stage(p.stage(v, _texel=rom(texture_lut(kind, bump_map, bump_size, bump_depth),
-                                          addr, "texels")))
+        lut = texture_lut(kind, bump_map, bump_size, bump_depth, bits)
+        v = p.stage(p.stage(v, _texel=rom(lut, addr, "texels")))
         texel = v.pop("_texel")
-        return {**v, "_hi": texel[8:16], "_lo": texel[:8]}
+        return {**v, "_hi": texel[bits:2 * bits], "_lo": texel[:bits]}
     F = weight_bits(b)
     half = 1 << (top - b - 1)
     new = {}
@@ -82,7 +87,7 @@ def fetch(p, v, s, t, kind, bump_map, bump_size, bump_depth, filter):
         sa = Mux(v["_s0"][0] == a, v["_s0"], v["_s1"])
         for c in (0, 1):
             tc = Mux(v["_t0"][0] == c, v["_t0"], v["_t1"])
-            lut = texture_lut(kind, bump_map, bump_size, bump_depth, (a, c))
+            lut = texture_lut(kind, bump_map, bump_size, bump_depth, bank=(a, c))
             reads[f"_b{a}{c}"] = rom(lut, Cat(sa[1:], tc[1:]), f"bank{a}{c}")
     par = {"_ps": v.pop("_s0")[0], "_pt": v.pop("_t0")[0]}
     v.pop("_s1"), v.pop("_t1")
