@@ -1,5 +1,5 @@
-"""Bump scenes (issue 11, scenes.md ``[bump]``): fenney_polar and fenney_xz through the
-renderer.
+"""Bump scenes (issue 11, scenes.md ``[bump]``): fenney_polar, fenney_xz and angular through
+the renderer.
 
 fenney_polar's bound, RTL against model, per fragment: the colour unit is bit-exact, so every
 RTL fragment must equal the model's colour for some choice of
@@ -19,6 +19,13 @@ largest d and s (per light and vector) over
   which can move its rounding to the patent's s8;
 - the dot product's X -1, 0, +1: fenney_dot is within ``golden.fenney.dot_bound`` (below one
   LSB) of the float, the model rounds.
+
+angular's bound, likewise monotone: between the least and the largest d and p over
+- the raw values of phi_N, theta_N and the twist psi -1, 0, +1 (each can move its angle code by
+  one), the texture coordinates -1, 0, +1;
+- bump_polar's own bound on diffuse and specular (``golden.angular.bump_polar_bounds``: the
+  rotations' interval bounds through the illumination's tables), then >> 1 and >> 5 as the
+  pipeline takes them.
 """
 import itertools
 import numpy as np
@@ -162,6 +169,64 @@ def test_xz_light_length_on_the_torus():
     assert err["xshading"][0] < err["linear"][0] / 4
 
 
+def _angular_interval(prep, ch):
+    lo, hi = {}, {}
+    for ds, dt in itertools.product((-1, 0, 1), repeat=2):
+        for da in itertools.product((-1, 0, 1), repeat=3):
+            _, out, bound = S.angular_model(prep, ch, da=da, ds=ds, dt=dt)
+            for key, src, shift, scale in (("d0", "diffuse", 1, 2.0 ** -14),
+                                           ("p0", "specular", 5, 1)):
+                a = (np.floor(np.maximum(out[src] - bound[src], 0)).astype(np.int64)
+                     >> shift) * scale
+                b = (np.ceil(out[src] + bound[src]).astype(np.int64) >> shift) * scale
+                lo[key] = np.minimum(lo.get(key, a), a)
+                hi[key] = np.maximum(hi.get(key, b), b)
+    return lo, hi
+
+
+@VERILATOR
+@pytest.mark.parametrize("rotation", ["paper", "exact"])
+def test_angular_scene_rtl_within_bound(rotation):
+    """A bricks torus through seed 003's angular pipeline, both rotations: every fragment's
+    colour within the interval above. The torus's top ring has theta_N = 0 at its vertices,
+    and its triangles' phi_N cross 0/360 deg: both hard cases are in the scene."""
+    prep = _prep(bump={"method": "angular", "rotation": rotation})
+    ang = prep["bump"]["angles"]
+    assert (ang["thetan"] < 1e-9).any()                        # theta_N = 0 at some vertex
+    assert (ang["phin"].max(1) >= 1).any()           # some triangles cross 0/360 deg
+    out = _rtl(prep)
+    frag, ch = S.model_fragments(prep)
+    assert len(out["x"]) == len(frag["x"]) > 500
+    for key in ("tri", "x", "y"):
+        np.testing.assert_array_equal(out[key], frag[key])
+    rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
+    lo, hi = _angular_interval(prep, ch)
+    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
+    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
+    bad = np.flatnonzero(((rtl < c_lo) | (rtl > c_hi)).any(-1))
+    assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
+                          f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
+
+
+def test_angular_flat_map_gives_the_unbumped_surface():
+    """The flat map (every texel theta_B = 0) through angular is the interpolated normal's
+    own shading: N'.L' = cos(theta_L'), the angle between L and the normal of (phi_N,
+    theta_N). With the exact rotation, the model stays within its derived interval of d =
+    clamp(N(phi_N, theta_N).L) computed in float from the same interpolated angles (the
+    interval: the angles' codes -1, 0, +1 and bump_polar's bound; diffuse only)."""
+    prep = _prep(bump={"method": "angular", "map": "flat", "rotation": "exact"},
+                 shading={"specular": False})
+    frag, ch = S.model_fragments(prep)
+    turn = 2 * np.pi
+    n = S.angular.to_vector(ch["phin"] * turn, ch["thetan"] * turn)
+    exact = np.clip(n @ prep["float"]["L"][0], 0, 1)
+    lo, hi = _angular_interval(prep, ch)
+    assert (exact >= lo["d0"] - 2.0 ** -14).all() and (exact <= hi["d0"] + 2.0 ** -14).all()
+    plain = S.shade_fragments(prep, {**ch, "d0": exact})
+    bumped = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag["tri"], ch)})
+    assert np.abs(plain.astype(int) - bumped.astype(int)).max() <= 2
+
+
 @VERILATOR
 @ONE_MODEL
 def test_polar_scene_under_backpressure():
@@ -232,7 +297,10 @@ def test_polar_builds_its_units():
     ({"shading": {"method": "phong"}}, "shading.method: phong interpolates the normal"),
     ({"mesh": {"shape": "plane", "segments": [3, 3]}, "bump": {"repeat": [8.0, 8.0]}},
      "bump.repeat: a triangle spans"),
-    ({"bump": {"method": "angular"}}, "bump.method: 'angular' is not rendered yet"),
+    ({"bump": {"method": "angular", "filter": "bilinear"}},
+     "bump.filter: angular filters nearest only"),
+    ({"bump": {"method": "angular"}, "lights": [{"to_light": [1.0, 0.0, 1.0]}] * 2},
+     "lights: bump.method = angular shades one light"),
     ({"bump": {"map": "no/such/map.png"}}, "bump.map: 'no/such/map.png' is neither"),
 ])
 def test_bad_bump_scenes_name_the_key(tables, message):

@@ -59,7 +59,7 @@ BAD = [
     ("[[lights]]\ntype = \"spot\"", "lights[0].type: must be one of directional"),
     ("[camera]\nup = [0, 1, -0.7142857142857143]", "camera.up: must not be parallel"),
     ("[camera]\neye = [0, 0, 0]", "camera.target: must differ from camera.eye"),
-    ("[bump]\nmethod = \"angular\"", "bump.method: 'angular' is not rendered yet"),
+    ("[bump]\nmethod = \"angular\"\nrotation = \"magic\"", "bump.rotation: must be one of paper, exact"),
     ("[image]\nwidth = 64\n[camera]\nfov_y = 180.0", "camera.fov_y: must be a finite number in 1..170"),
     ("\n".join(["[[lights]]"] * 5), "lights: 5 lights; the pipeline shades at most 4"),
     ("[bump]\nmethod = \"fenney_xz\"\n" + "\n".join(["[[lights]]"] * 2),
