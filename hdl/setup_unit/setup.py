@@ -200,6 +200,9 @@ class Setup:
             q, rem = self._floor_divide(sc, f"{e}_{kind}", num, den, bits)
             out[f"{e}_{kind}"] = q
             out[f"{e}_{'r' if kind == 'i' else 'd'}"] = rem
+        for e in EDGES:      # the walker's start values (it holds r - d and n - d: span.py)
+            n, rem, d = out[f"{e}_n"], out[f"{e}_r"], out[f"{e}_d"]
+            out.update(sc.lets(**{f"{e}_r0": n - 1 - rem - d, f"{e}_n0": n - d}))
         out.update(self._tracks(sc, r, out, xt, yt))
         # alpha per pixel step: S y2 / Omega, -S y1 / Omega (eq 20), s(35, 34) saturated
         lo, hi = -(1 << w.FA), (1 << w.FA) - 1
@@ -264,7 +267,7 @@ class Setup:
         pos = sc.lets(X0=S // 2 - xt, Y0=S * r["j0"] + S // 2 - yt, Ym=S * r["jm"] + S // 2 - yt,
                       Xe=S * sel["sel_i"] + S // 2 - xt, Xt=S * out["t_i"] + S // 2 - xt,
                       qe=sel["sel_q"], qt=out["t_q"])
-        tr = {}
+        tr = {"fs": {"first_short": first_short}}      # the walker's choice at its load too
 
         def pair(name, X, Y):
             tr[name] = sc.lets(**{f"{name}_u": mod(sc.mul(f"{name}_xy2", X, y2)

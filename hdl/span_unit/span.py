@@ -79,16 +79,16 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     m.d.comb += [src_ready.eq(~have & ~full), out_link.valid.eq(full)]
 
     def init(e):     # the walker's remainder i den - num from the setup's floor remainder,
-        # held less d (and n as n - d): see _step
-        return {"i": src[f"{e}_i"], "r": src[f"{e}_n"] - 1 - src[f"{e}_r"] - src[f"{e}_d"],
-                "q": src[f"{e}_q"], "d": src[f"{e}_d"], "n": src[f"{e}_n"] - src[f"{e}_d"]}
+        # held less d (and n as n - d): see _step; the setup computes both (r0, n0)
+        return {"i": src[f"{e}_i"], "r": src[f"{e}_r0"], "q": src[f"{e}_q"],
+                "d": src[f"{e}_d"], "n": src[f"{e}_n0"][:len(src[f"{e}_n"])]}
 
     with m.If(load):
         m.d.sync += [j.eq(src["j0"]), j1.eq(src["j1"]), jm.eq(src["jm"]),
                      left_long.eq(src["left_long"]), last.eq(src["j0"] + 1 == src["j1"]),
                      at_jm.eq(src["j0"] + 1 == src["jm"])]
         m.d.sync += [held[k].eq(src[k]) for k in keep]
-        first_short = Mux(src["j0"] >= src["jm"], 1, 0)
+        first_short = src["first_short"]
         for e in ("l", "t"):
             m.d.sync += [edge[e][k].eq(val) for k, val in init(e).items()]
         s_init, t_init = init("s"), init("t")
