@@ -28,7 +28,7 @@ import numpy as np
 from hdl.texture_unit import weight_bits
 
 from .angular import to_polar
-from .fenney import texel_encode
+from .fenney import texel_decode, texel_encode
 
 MAPS = ("flat", "bricks", "dimples")
 DEPTH_SCALE = 1 / 16          # height 1 at depth 1, in tile widths
@@ -232,3 +232,47 @@ def sample(normals, st, filter="nearest"):
     cs, ct = (i0[:, 0], i1[:, 0]), (i0[:, 1], i1[:, 1])
     n = sum(normals[ct[b], cs[a]] * (ws[a] * wt[b])[:, None] for a in (0, 1) for b in (0, 1))
     return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+
+# ---- what a texture ROM holds ------------------------------------------------------------------
+
+KINDS = {"fenney_polar": "sr", "fenney_xz": "xz", "angular": "polar"}
+
+
+def texel_file(path):
+    """Pre-encoded X/Z texels (fenney_xz; the patent's tools write texels, not heights): an
+    .npz with arrays ``texel_x`` and ``texel_z`` of codes 0..255, square. Codes that the
+    encoder never writes (255, or past the diamond |X - 127| + |Z - 127| <= 127) are allowed:
+    texel_decode's guard meets them."""
+    try:
+        with np.load(path) as f:
+            tx, tz = (np.asarray(f[k]) for k in ("texel_x", "texel_z"))
+    except (OSError, ValueError, KeyError) as e:
+        raise BumpError(f"bump.map: {path!r} is not an .npz of texel_x and texel_z ({e})") \
+            from None
+    if tx.shape != tz.shape or tx.ndim != 2 or not ((0 <= tx) & (tx <= 255)).all() \
+            or not ((0 <= tz) & (tz <= 255)).all():
+        raise BumpError(f"bump.map: {path!r}: texel_x and texel_z must be equal 2-D arrays of "
+                        f"codes 0..255")
+    return tx.astype(np.int64), tz.astype(np.int64)
+
+
+def bump_texels(kind, bump_map, size, depth, bits=8):
+    """``(hi, lo, normals)``: a map's texels as its texture ROM stores them (``kind`` "sr": S,
+    R; "xz": TexelX, TexelZ; "polar": theta, phi of ``bits`` each) and the exact
+    tangent-frame normals the reference shades with. A texel file's normals are its decoded
+    vectors, normalised."""
+    if str(bump_map).endswith(".npz"):
+        if kind != "xz":
+            raise BumpError(f"bump.map: a texel file ({bump_map!r}) holds X/Z texels, for "
+                            f"bump.method = fenney_xz only")
+        tx, tz = texel_file(bump_map)
+        d = texel_decode(tx, tz)
+        n = np.stack([d["x"], d["z"], d["y"]], -1).astype(float)
+        return tx, tz, n / np.linalg.norm(n, axis=-1, keepdims=True)
+    n = tangent_normals(height_map(bump_map, size), depth)
+    if kind == "polar":
+        lo, hi = polar_texels(n, bits)
+    else:
+        hi, lo = sr_texels(n) if kind == "sr" else xz_texels(n)
+    return hi, lo, n

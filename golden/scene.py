@@ -370,10 +370,11 @@ def _bump(scene, drawn, Ls, Hs, pipe):
       eq 1-4), each * 255, and Q in turns * 256. A light below the surface's horizon is
       taken at T_L = 0: the patent's 8-bit k2 is unsigned (docs/bump.md)."""
     b = scene["bump"]
-    h = bumps.height_map(b["map"], b["size"])
-    size = h.shape[0]
-    if h.shape[0] != h.shape[1] or size & (size - 1) or size > MAX_TEXTURE:
-        raise SceneError(f"bump.map: {b['map']!r} is {h.shape[1]} x {h.shape[0]} texels; a "
+    hi, lo, normals = bumps.bump_texels(bumps.KINDS[b["method"]], b["map"], b["size"],
+                                        b["depth"], ANGLE_BITS)
+    size = hi.shape[0]
+    if hi.shape[0] != hi.shape[1] or size & (size - 1) or size > MAX_TEXTURE:
+        raise SceneError(f"bump.map: {b['map']!r} is {hi.shape[1]} x {hi.shape[0]} texels; a "
                          f"texture ROM needs a square power of two up to {MAX_TEXTURE}")
     pipe.update(bump=b["method"], bump_map=b["map"], bump_size=size, bump_depth=b["depth"],
                 filter=b["filter"])
@@ -397,7 +398,6 @@ def _bump(scene, drawn, Ls, Hs, pipe):
     Bt = np.cross(Nt, Tt)
     consts = {}
     lanes = ScenePipeline.spec(**pipe).lanes
-    normals = bumps.tangent_normals(h, b["depth"])
     out = {"st": st, "constants": consts, "lanes": lanes, "normals": normals,
            "frames": frames, "size": size, "filter": b["filter"]}
     if b["method"] == "angular":
@@ -424,12 +424,12 @@ def _bump(scene, drawn, Ls, Hs, pipe):
                          "psi": wrap(turns(psi))}
         for k in ("phin", "psi"):
             out["angles"][k] -= np.floor(out["angles"][k].min(axis=1, keepdims=True))
-        out["phi"], out["theta"] = bumps.polar_texels(normals, ANGLE_BITS)
+        out["theta"], out["phi"] = hi, lo
         return out
     if b["method"] == "fenney_xz":
         # each vertex's L' and H' in its own tangent frame (they vary over the surface), and
         # each vector's per-edge constants (L'i.L'j - 1)/2 (seed 000 section 2)
-        out["X"], out["Z"] = bumps.xz_texels(normals)
+        out["X"], out["Z"] = hi, lo
         out["vectors"] = {}
         for t, k in lanes:
             vec = np.stack([bumps.to_tangent((Ls if t == "l" else Hs)[k], *(f[:, c] for f in
@@ -449,7 +449,7 @@ def _bump(scene, drawn, Ls, Hs, pipe):
         consts[f"{t}{k}_k2"] = np.rint(255 * np.sin(elev)).astype(np.int64)
         consts[f"{t}{k}_k3"] = np.rint(255 * np.cos(elev)).astype(np.int64)
         consts[f"{t}{k}_q"] = np.rint(rot / (2 * np.pi) * 256).astype(np.int64) % 256
-    out["S"], out["R"] = bumps.sr_texels(normals)
+    out["S"], out["R"] = hi, lo
     return out
 
 

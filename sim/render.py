@@ -14,6 +14,8 @@ import numpy as np
 
 from golden import scene as S
 
+from hdl.units import make_unit
+
 from .verilog import BUILD, SCENES
 
 __all__ = ["render", "compare", "gallery"]
@@ -91,10 +93,18 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
               f"{vs_ref['psnr_db']} dB, max {vs_ref['max_abs']}")
     n = len(frags["x"])
     drawn = prep["triangles"]["drawn"]
-    units = [{"name": name, "why": why, "params": p,
-              "latency": pipe.part_latency(name, p),
-              "items_in": drawn if name == "raster" else n, "items_out": n}
-             for name, p, why in pipe.parts()]
+    units = []
+    for name, p, why in pipe.parts():
+        unit = {"name": name, "why": why, "params": p, "latency": pipe.part_latency(name, p),
+                "items_in": drawn if name == "raster" else n, "items_out": n}
+        if name == "bump_polar":            # its units: the rotations of L and H, illum
+            bp = make_unit(name, spec=True, **p)
+            unit["parts"] = [{"name": part, "why": what, "latency": u.latency} for part, u, what
+                             in (("rotation", bp.rotation, "L into N's frame"),
+                                 ("rotation", bp.rotation, "H into N's frame"),
+                                 ("illum", bp.illum, "law of cosines, diffuse and specular "
+                                                     "tables"))]
+        units.append(unit)
     metrics = {"scene": scene["name"], "method": params["method"],
                "bump": scene["bump"]["method"], "simulator": simulator,
                "size": list(prep["size"]), "triangles": prep["triangles"],
@@ -113,13 +123,18 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
         rm, rr = metrics["rtl_vs_model"], metrics["rtl_vs_reference"]
         print(f"{scene['name']}: {drawn} triangles ({prep['triangles']['culled']} culled) -> "
               f"{n:,} fragments, {info['cycles']:,} cycles, {wall:.1f} s on {simulator}; "
-              f"units: {', '.join(u['name'] for u in units)}\n"
+              f"units: {', '.join(_names(u) for u in units)}\n"
               f"  RTL vs model: max {rm['max_abs']} levels, {rm['pixels_over_1']} pixels over 1, "
               f"coverage mismatch {rm['coverage_mismatch']}; RTL vs reference: "
               f"{rr['psnr_db']} dB (model: {metrics['model_vs_reference']['psnr_db']} dB), "
               f"max {rr['max_abs']}\n"
               f"  wrote {', '.join(f'{out_dir}/{f}' for f in ('rtl.png', 'model.png', 'reference.png', 'diff.png', 'metrics.json'))}")
     return metrics
+
+
+def _names(unit):
+    parts = unit.get("parts")
+    return unit["name"] + (f" ({', '.join(p['name'] for p in parts)})" if parts else "")
 
 
 def gallery(scenes_dir=None, simulator="verilator"):

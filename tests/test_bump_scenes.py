@@ -31,7 +31,7 @@ import itertools
 import numpy as np
 import pytest
 
-from golden import fenney, scene as S
+from golden import bump as bumps, fenney, scene as S
 from hdl.scene import ScenePipeline, units_in
 from sim.simulators import available
 
@@ -115,12 +115,17 @@ def _xz_interval(prep, ch):
 
 
 @VERILATOR
-@pytest.mark.parametrize("filter", ["nearest", "bilinear"])
-def test_xz_scene_rtl_within_bound(filter):
+@pytest.mark.parametrize("filter,light", [("nearest", [-1.0, -1.0, 2.0]),
+                                          ("bilinear", [-1.0, -1.0, 2.0]),
+                                          ("nearest", [0.3, 0.2, -1.0])],
+                         ids=["nearest", "bilinear", "nearest-below-the-horizon"])
+def test_xz_scene_rtl_within_bound(filter, light):
     """A bricks torus through fenney_xz (L' and H' quadratic, each with its own constants),
-    both filters: every fragment's colour within the interval above; and the model itself
-    within 1 level of the RTL on almost every pixel."""
-    prep = _prep(bump={"method": "fenney_xz", "filter": filter})
+    both filters, and the light below most triangles' horizon (L'.N < 0: the dot products
+    clamp): every fragment's colour within the interval above; and the model itself within
+    1 level of the RTL on almost every pixel."""
+    prep = _prep(bump={"method": "fenney_xz", "filter": filter},
+                 lights=[{"to_light": light}])
     out = _rtl(prep)
     frag, ch = S.model_fragments(prep)
     assert len(out["x"]) == len(frag["x"]) > 500
@@ -135,6 +140,30 @@ def test_xz_scene_rtl_within_bound(filter):
                           f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
     model = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag["tri"], ch)}).astype(int)
     assert (np.abs(rtl - model).max(-1) > 1).mean() < 0.01
+
+
+@VERILATOR
+def test_xz_texels_at_every_edge_bilinear():
+    """A texel file (tests/data/xz_edges.npz) holding texels on the diamond's edge, codes 0,
+    254 and 255, and texels past the diamond, bilinear: filtering neighbours on the edge
+    rounds past it, and filtering across invalid texels blends them; texel_decode's guard
+    meets both, and every fragment stays within the bound. Diffuse only (one lane)."""
+    prep = _prep(bump={"method": "fenney_xz", "filter": "bilinear",
+                       "map": "tests/data/xz_edges.npz"}, shading={"specular": False})
+    frag, ch = S.model_fragments(prep)
+    b, raw = prep["bump"], lambda v: np.rint(np.asarray(v) / 2.0 ** -14).astype(np.int64)
+    x, z = (bumps.fetch(b[c], raw(ch["s"]), raw(ch["t"]), "bilinear") for c in ("X", "Z"))
+    invalid = fenney.texel_decode(x, z)["invalid"].astype(bool)
+    assert invalid.sum() > 50 and (~invalid).sum() > 50          # both kinds, many of each
+    assert ((x == 255) | (z == 255)).any()
+    out = _rtl(prep)
+    for key in ("tri", "x", "y"):
+        np.testing.assert_array_equal(out[key], frag[key])
+    rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
+    lo, hi = _xz_interval(prep, ch)
+    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
+    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
+    assert not ((rtl < c_lo) | (rtl > c_hi)).any()
 
 
 def test_xz_flat_map_gives_the_unbumped_surface():

@@ -43,15 +43,10 @@ def texture_lut(kind, bump_map, bump_size, bump_depth, bits=8, bank=None):
     phi of ``bits`` each); ``bank`` (a, b): only the texels whose s and t have those
     parities."""
     from golden import bump as maps
-    h = maps.height_map(bump_map, bump_size)
-    if h.shape != (bump_size, bump_size):
-        raise ValueError(f"bump_map {bump_map!r} is {h.shape[1]} x {h.shape[0]} texels, "
+    hi, lo, _ = maps.bump_texels(kind, bump_map, bump_size, bump_depth, bits)
+    if hi.shape != (bump_size, bump_size):
+        raise ValueError(f"bump_map {bump_map!r} is {hi.shape[1]} x {hi.shape[0]} texels, "
                          f"not bump_size = {bump_size} square")
-    n = maps.tangent_normals(h, bump_depth)
-    if kind == "polar":
-        lo, hi = maps.polar_texels(n, bits)
-    else:
-        hi, lo = maps.sr_texels(n) if kind == "sr" else maps.xz_texels(n)
     texels = (hi << bits) | lo
     if bank is not None:
         texels = texels[bank[1]::2, bank[0]::2]
