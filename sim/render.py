@@ -148,9 +148,13 @@ def gallery(scenes_dir=None, simulator="verilator"):
     for path in scenes:
         m = render(path, simulator=simulator)
         out = BUILD / "render" / m["scene"]
-        label = (f"{m['scene']}: {m['method']}"
-                 f"{', ' + m['pipeline']['params']['power'] if m['pipeline']['params']['specular'] else ', diffuse'}",
-                 f"{m['rtl_vs_reference']['psnr_db']} dB vs reference")
+        q = m["pipeline"]["params"]
+        if m["bump"] == "none":
+            what = f"{m['method']}, {q['power'] if q['specular'] else 'diffuse'}"
+        else:
+            what = m["bump"] + (f", {q['rotation']} rotation" if m["bump"] == "angular" else
+                                f", {q['filter']}")
+        label = (f"{m['scene']}: {what}", f"{m['rtl_vs_reference']['psnr_db']} dB vs reference")
         tiles.append((Image.open(out / "rtl.png").convert("RGB"), label))
         if m["scene"] == "default":
             tiles.append((Image.open(out / "reference.png").convert("RGB"),

@@ -214,12 +214,16 @@ def _angular_interval(prep, ch):
 
 
 @VERILATOR
-@pytest.mark.parametrize("rotation", ["paper", "exact"])
-def test_angular_scene_rtl_within_bound(rotation):
-    """A bricks torus through seed 003's angular pipeline, both rotations: every fragment's
-    colour within the interval above. The torus's top ring has theta_N = 0 at its vertices,
-    and its triangles' phi_N cross 0/360 deg: both hard cases are in the scene."""
-    prep = _prep(bump={"method": "angular", "rotation": rotation})
+@pytest.mark.parametrize("rotation,light", [("paper", [-1.0, -1.0, 2.0]),
+                                            ("exact", [-1.0, -1.0, 2.0]),
+                                            ("paper", [0.3, 0.2, -1.0])],
+                         ids=["paper", "exact", "paper-below-the-horizon"])
+def test_angular_scene_rtl_within_bound(rotation, light):
+    """A bricks torus through seed 003's angular pipeline, both rotations, and the light below
+    most triangles' horizon (negative inner products clamp): every fragment's colour within
+    the interval above. The torus's top ring has theta_N = 0 at its vertices, and its
+    triangles' phi_N cross 0/360 deg: both hard cases are in the scene."""
+    prep = _prep(bump={"method": "angular", "rotation": rotation}, lights=[{"to_light": light}])
     ang = prep["bump"]["angles"]
     assert (ang["thetan"] < 1e-9).any()                        # theta_N = 0 at some vertex
     assert (ang["phin"].max(1) >= 1).any()           # some triangles cross 0/360 deg
