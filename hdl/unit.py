@@ -82,7 +82,8 @@ def param_range(default, allowed, per_channel=False):
     if isinstance(default, (int, float)):
         return {"min": allowed[0], "max": allowed[1]}
     if allowed is None:
-        return {"string": True}
+        return {"string": ("one per channel, comma-separated" if per_channel else
+                           "any string")}
     out = {"choices": list(allowed)}
     if per_channel:
         out["per_channel"] = "a comma-separated list, one per channel (one name applies to all)"

@@ -174,9 +174,14 @@ def test_param_ranges_are_enforced_and_described():
                     make_unit(name, spec=True, **other, **{key: r["max"] + 1})
                 with pytest.raises(ParamError, match=key):
                     make_unit(name, spec=True, **other, **{key: r["min"] - 1})
-            else:
+            elif "choices" in r:
                 for choice in r["choices"]:
                     make_unit(name, spec=True, **{key: choice})
+                with pytest.raises(ParamError, match=key):
+                    make_unit(name, spec=True, **{key: "nonsense"})
+            else:                   # a free string its unit parses (raster's groups)
+                assert r == {"string": "one per channel, comma-separated"}
+                make_unit(name, spec=True, **{key: cls.PARAMS[key]})
                 with pytest.raises(ParamError, match=key):
                     make_unit(name, spec=True, **{key: "nonsense"})
 

@@ -241,11 +241,12 @@ class Setup:
         """Signed floor division: q = floor(num / den), r = num - q den in [0, den), through
         M = -num - 1 for negative numerators: q = -q(M) - 1, r = den - 1 - r(M)."""
         pre = sc.lets(**{f"{name}_neg": num < 0,
-                         f"{name}_m": Mux(num < 0, -num - 1, num).as_unsigned()[:len(num)]})
+                         f"{name}_m": Mux(num < 0, -num - 1, num).as_unsigned()[:len(num)],
+                         f"{name}_dm1": den - 1})          # so r's fix-up is one subtract
         neg = pre[f"{name}_neg"]
         q, r = sc.divide(name, pre[f"{name}_m"], den, bits)
         post = sc.lets(**{f"{name}_q": Mux(neg, -(q + 1), q + Const(0, signed(2))),
-                          f"{name}_r": Mux(neg, den - 1 - r, r)[:len(den)]})
+                          f"{name}_r": Mux(neg, pre[f"{name}_dm1"] - r, r)[:len(den)]})
         return post[f"{name}_q"], post[f"{name}_r"]
 
     def _tracks(self, sc, r, out, xt, yt):

@@ -31,7 +31,7 @@ class Raster(Unit):
               "recip": "newton", "recip_iters": 2, "groups": "0"}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3),
-              "groups": tuple(str(g) for g in range(12))}
+              "groups": None}     # a string: parse_groups checks it
     PER_CHANNEL = ("modes", "groups")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
