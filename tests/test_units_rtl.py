@@ -63,6 +63,10 @@ def test_bump_polar_latency_is_the_sum_of_its_parts():
 
 
 AGREE = [(name, {"screen_bits": 6} if name == "raster" else {}) for name in UNITS]
+# bump_polar is rotation, rotation and illum on one pipeline, each of which agrees on
+# cocotb-verilator here; its own cocotb-verilator model takes 52 s to build, so it agrees on
+# the other three (make bench still runs it there)
+SLOW_BUILDS = {("cocotb-verilator", "bump_polar")}
 
 
 @pytest.mark.parametrize("name,params", AGREE, ids=[n for n, _ in AGREE])
@@ -75,7 +79,7 @@ def test_simulators_agree(name, params):
         inputs = random_triangles(rng, 30, **params_of(name, params), size=TYPICAL_SIZE)
     else:
         inputs = MODELS[name].vectors(rng, 300, **params_of(name, params))
-    sims = [s for s in SIMS if available(s) is None]
+    sims = [s for s in SIMS if available(s) is None and (s, name) not in SLOW_BUILDS]
     assert "amaranth" in sims and "verilator" in sims
     runs = {s: stream(name, inputs, s, params) for s in sims}
     ref_out, ref_info = runs["amaranth"]
