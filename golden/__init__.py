@@ -410,6 +410,8 @@ MODELS = {
     "raster": Model(_raster_run, _raster_vectors, _raster_check, False, typical=300),
     "phong": Model(lambda inp, **q: shade.phong(inp, **q)[0], shade._phong_vectors,
                    shade.phong_check, False),
+    "peercy": Model(lambda inp, **q: shade.peercy(inp, **q)[0], shade._peercy_vectors,
+                    shade.peercy_check, False),
     "power_table": Model(lambda inp, **q: {"p": shade.power_table(inp["s"], **q)},
                          shade._power_vectors,
                          _exact_check(lambda inp, **q: {"p": shade.power_table(inp["s"], **q)}),

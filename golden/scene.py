@@ -589,7 +589,8 @@ def xz_model(prep, ch, ds=0, dt=0, dl=None, offset=None):
     """fenney_xz per fragment: the X/Z texels fetched (``golden.bump.fetch``: nearest, or the
     bilinear filter bit for bit) and decoded (``golden.fenney.texel_decode``), each lane's
     interpolated vector as the patent's s8 (round(127 v), clamped to +-127, from its raw
-    value), dotted (``golden.fenney.dot_float``, h = 1, rounded to the 10-bit X); X << 4 as
+    value), dotted (``golden.fenney.dot_float``, h = 1, plain or renormalised as the pipeline's
+    ``normalize``, rounded to the 10-bit X); X << 4 as
     a value. The tests' bound: ``ds``, ``dt`` added to the raw texture coordinates, ``dl``
     ``{lane: (dx, dy, dz)}`` to a vector's raw components, ``offset`` ``{key: n}`` to X."""
     b, lsb = prep["bump"], VALUE.lsb
@@ -605,7 +606,9 @@ def xz_model(prep, ch, ds=0, dt=0, dl=None, offset=None):
             inp[f"l{a}"] = np.clip((r * 127 + (1 << 13)) >> 14, -127, 127)
         inp["h"] = np.full(len(r), 255)
         key = f"{'d' if lane == 'l' else 's'}{k}"
-        x = np.clip(np.rint(fenney.dot_float(inp)) + (offset or {}).get(key, 0), 0, 1023)
+        q = prep["params"]
+        x = np.clip(np.rint(fenney.dot_float(inp, q.get("normalize", False), q.get("rsqrt_bits")))
+                    + (offset or {}).get(key, 0), 0, 1023)
         out[key] = (x.astype(np.int64) << 4) * lsb
     return out
 

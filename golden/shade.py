@@ -5,7 +5,8 @@
   against the exact power is ``power_error`` (tested separately against ``Lut.max_error``).
 - ``colour``: bit-exact, from the real-valued sum (every term is a dyadic rational that float64
   holds exactly), rounded half up.
-- ``phong``: float (numpy sqrt), with the bound derived from the RTL's fraction bits.
+- ``phong`` and ``peercy``: float (numpy sqrt), with the bound derived from the RTL's fraction
+  bits and its table.
 """
 import numpy as np
 
@@ -103,9 +104,9 @@ def _phong_vectors_of(params):
 
 
 def phong(inp, lights=1, specular=True, rsqrt_iters=2):
-    """d_k = n.L_k / |n|, s_k = n.H_k / |n| (raw VALUE, saturated), |n| floored at 1/4."""
+    """d_k = n.L_k / |n|, s_k = n.H_k / |n| (raw VALUE, saturated), |n| held in [1/4, 2]."""
     n = np.stack([_value(inp[f"n{a}"]) for a in "xyz"])
-    length = np.maximum(np.sqrt((n * n).sum(0)), 0.25)
+    length = np.clip(np.sqrt((n * n).sum(0)), 0.25, 2.0)
     out = {}
     for *keys, o in _phong_vectors_of(dict(lights=lights, specular=specular)):
         vec = np.stack([_value(inp[k]) for k in keys])
@@ -154,4 +155,81 @@ def _phong_vectors(rng, n, lights=1, specular=True, rsqrt_iters=2):
         lv /= np.linalg.norm(lv, axis=1, keepdims=True)
         for i, k in enumerate(keys):
             rnd[k] = np.rint(lv[:, i] * (one - 1))
+    return {k: np.concatenate([hard[k], rnd[k]]).astype(np.int64) for k in hard}
+
+
+# ---- peercy ----------------------------------------------------------------------------------
+
+def _peercy_tangent(inp, vec):
+    """M v (float), each component saturated to VALUE as the RTL's L_t and H_t are."""
+    m = np.stack([np.stack([_value(inp[f"{r}{a}"]) for a in "xyz"]) for r in "tbn"])
+    w = np.stack([_value(inp[f"{vec}{a}"]) for a in "xyz"])
+    return np.clip(np.einsum("ijk,jk->ik", m, w), VALUE.min / ONE, VALUE.max / ONE)
+
+
+def peercy(inp, rsqrt_bits=10):
+    """d = P.(M L) / |M L|, s = P.(M H) / |M H| (raw VALUE, saturated), |.| held in
+    [1/4, 2]; and each vector's length."""
+    p = np.stack([_value(inp[f"p{a}"]) for a in "xyz"])
+    out, length = {}, {}
+    for vec, o in (("l", "d"), ("h", "s")):
+        x = _peercy_tangent(inp, vec)
+        length[o] = np.clip(np.sqrt((x * x).sum(0)), 0.25, 2.0)
+        out[o] = np.clip((p * x).sum(0) / length[o] * ONE, VALUE.min, VALUE.max)
+    return out, length
+
+
+def peercy_check(inp, out, rsqrt_bits=10):
+    """Per output, in LSBs of VALUE, with ``len`` the vector's length less the rounding below
+    (floored at 1/4): 1/2 for the last rounding; L_t's rounding to VALUE (1/2 LSB a component,
+    sqrt(3)/2 LSB in all) moves P.x/|x| by at most |P| sqrt(3)/2 / len (its gradient is at most
+    |P|/|x|); the dot product's rounding to DOT_FRAC bits, 2^(14 - DOT_FRAC)/2 / len; and |d|
+    times the relative error of g: the table's own (its max_error over g >= 1/2) and |x|^2's
+    truncation to 20 fraction bits (2^-20 / len^2, halved by the square root)."""
+    from hdl.arith import rsqrt_seed
+    want, length = peercy(inp, rsqrt_bits)
+    p = np.sqrt(sum(_value(inp[f"p{a}"]) ** 2 for a in "xyz"))
+    rel_g = rsqrt_seed(rsqrt_bits, G_FRAC).max_error * 2.0 ** (1 - G_FRAC)
+    res = {}
+    for k, w in want.items():
+        ln = np.maximum(length[k] - np.sqrt(3) * 2.0 ** -(VALUE.frac_bits + 1), 0.25)
+        bound = (0.5 + p * np.sqrt(3) / 2 / ln + 0.5 * 2.0 ** (VALUE.frac_bits - DOT_FRAC) / ln
+                 + np.abs(w) * (rel_g + 2.0 ** -21 / ln ** 2))
+        res[k] = (np.abs(np.asarray(out[k], float) - w), bound)
+    return res
+
+
+def _peercy_vectors(rng, n, rsqrt_bits=10):
+    """Hard cases first: the identity frame and its axis permutations with L, H and P along
+    every axis (P.L < 0 and P perpendicular among them); the frame shrunk to 1/8 and to 0 (L_t
+    at and below the floor, from frames interpolated between opposite ones); rows near 2 (|L_t|
+    past the cap, L_t's components saturated). Then random frames: a rotation with each row
+    shortened to 0.8..1 (interpolation), unit L and H, a unit bump normal with z > 0."""
+    n = 20_000 if n is None else n
+    one = int(ONE)
+    axes = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, 0, -1]])
+    frames = [np.eye(3), np.eye(3)[[1, 2, 0]], np.eye(3)[[2, 0, 1]] * [[1], [-1], [1]],
+              np.eye(3) / 8, np.zeros((3, 3)), np.full((3, 3), 1.99)]
+    f, l, b = np.meshgrid(np.arange(len(frames)), np.arange(len(axes)), np.arange(len(axes)),
+                          indexing="ij")
+    f, l, b = f.ravel(), l.ravel(), b.ravel()
+    hard = {}
+    for i, r in enumerate("tbn"):
+        for j, a in enumerate("xyz"):
+            hard[f"{r}{a}"] = np.rint(np.array([fr[i, j] for fr in frames])[f] * one)
+    for j, a in enumerate("xyz"):
+        hard[f"l{a}"] = axes[l, j] * (one - 1)
+        hard[f"h{a}"] = axes[(l + 1) % len(axes), j] * (one - 1)
+        hard[f"p{a}"] = axes[b, j] * (one - 1)
+    m = max(0, n - len(f))
+    q, _ = np.linalg.qr(rng.normal(size=(m, 3, 3)))
+    q *= rng.uniform(0.8, 1.0, (m, 3, 1))
+    rnd = {f"{r}{a}": np.rint(q[:, i, j] * one) for i, r in enumerate("tbn")
+           for j, a in enumerate("xyz")}
+    for name in "lhp":
+        v = rng.normal(size=(m, 3))
+        if name == "p":
+            v[:, 2] = np.abs(v[:, 2])
+        v /= np.linalg.norm(v, axis=1, keepdims=True)
+        rnd.update({f"{name}{a}": np.rint(v[:, j] * (one - 1)) for j, a in enumerate("xyz")})
     return {k: np.concatenate([hard[k], rnd[k]]).astype(np.int64) for k in hard}

@@ -14,7 +14,7 @@ from .fixed import u
 from .lut import build_lut, rom
 
 __all__ = ["products", "leading_one", "leading_zeros", "normalise", "recip_seed", "rsqrt_seed",
-           "rsqrt_stages", "rsqrt"]
+           "rsqrt_addr", "rsqrt_stages", "rsqrt"]
 
 
 def products(p, v, jobs, port=18):
@@ -74,6 +74,14 @@ def rsqrt_seed(seed_bits, frac):
     return build_lut(lambda m: 1 / np.sqrt(m), seed_bits, u(frac + 1, frac), edges=edges)
 
 
+def rsqrt_addr(n, width, seed_bits):
+    """``rsqrt_seed``'s address for ``m = n / 2**(width-2)`` in [1, 4): the exponent's parity
+    (the top bit), then the ``seed_bits - 1`` bits below the leading one."""
+    k = seed_bits - 1
+    return Cat(Mux(n[width - 1], n[width - 1 - k:width - 1], n[width - 2 - k:width - 2]),
+               n[width - 1])
+
+
 def rsqrt_stages(iters):
     return 2 + 5 * iters
 
@@ -84,11 +92,7 @@ def rsqrt(p, v, key, width, frac, iters=2, seed_bits=8, out="g"):
     The seed's output registered twice; per step y^2, m y^2 (``m`` in 18-bit slices),
     3 - m y^2 (below 4: the seed is within 2**-7), and the product, each in its own stage."""
     lut = rsqrt_seed(seed_bits, frac)
-    n = v[key]
-    k = seed_bits - 1                                   # bits below the leading one
-    addr = Cat(Mux(n[width - 1], n[width - 1 - k:width - 1], n[width - 2 - k:width - 2]),
-               n[width - 1])
-    v = p.stage(v, **{out: rom(lut, addr, "rsqrt_seed")})
+    v = p.stage(v, **{out: rom(lut, rsqrt_addr(v[key], width, seed_bits), "rsqrt_seed")})
     v = p.stage(v)                                      # the table's output
     for _ in range(iters):
         y = v[out]

@@ -40,7 +40,7 @@ from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import Out
 
 from .fixed import Field, binary_angle, u
-from .illum_unit.fenney_dot import dot_lanes
+from .illum_unit.fenney_dot import FenneyDot, dot_lanes
 from .illum_unit.fenney_polar import polar_lanes
 from .illum_unit.bump_polar import BumpPolar
 from .illum_unit.fenney_power import power_lanes as fenney_lanes
@@ -72,13 +72,15 @@ class ScenePipeline(Unit):
               "specular": True, "power": "table", "shininess": 32.0, "mant_bits": 6,
               "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
               "bump": "none", "bump_map": "bricks", "bump_size": 256, "bump_depth": 1.0,
-              "filter": "nearest", "trig_bits": 10, "rotation": "paper"}
+              "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
+              "rsqrt_bits": 12}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
               "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
               "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "rsqrt_iters": (1, 3), "bump": BUMPS, "bump_map": None,
               "bump_size": (16, MAX_TEXTURE), "bump_depth": (0.0, 1e9), "filter": FILTERS,
-              "trig_bits": (4, 16), "rotation": ("paper", "exact")}
+              "trig_bits": (4, 16), "rotation": ("paper", "exact"),
+              "rsqrt_bits": FenneyDot.RANGES["rsqrt_bits"]}
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, **q):
@@ -158,8 +160,8 @@ class ScenePipeline(Unit):
                         f"bump.method = fenney_polar: {len(self.lanes)} lanes ({vectors})"))
         elif q["bump"] == "fenney_xz":
             out.append(("texel_decode", {}, "bump.method = fenney_xz"))
-            out.append(("fenney_dot", {}, f"bump.method = fenney_xz: {len(self.lanes)} lanes "
-                        f"({vectors})"))
+            out.append(("fenney_dot", self.dot_params, f"bump.method = fenney_xz: "
+                        f"{len(self.lanes)} lanes ({vectors})"))
         if q["method"] == "phong":
             out.append(("phong", dict(lights=q["lights"], specular=q["specular"],
                                       rsqrt_iters=q["rsqrt_iters"]),
@@ -175,6 +177,12 @@ class ScenePipeline(Unit):
         out.append(("colour", dict(lights=q["lights"], specular=q["specular"]),
                     "material, lights"))
         return out
+
+    @property
+    def dot_params(self):
+        """fenney_dot's: the patent's plain dot product, or the bump vector renormalised (a
+        hardware choice, not a scene key: ``make tradeoffs`` sweeps it)."""
+        return dict(normalize=self.params["normalize"], rsqrt_bits=self.params["rsqrt_bits"])
 
     @property
     def bump_polar_params(self):
@@ -304,7 +312,7 @@ class ScenePipeline(Unit):
                     lanes = [tuple(f"_{t}{k}{a}" for a in "xyz") + (f"_h{t}{k}", f"_x{t}{k}")
                              for t, k in self.lanes]
                     v.update({f"_h{t}{k}": Const(255, 8) for t, k in self.lanes})   # h = 1
-                    v = dot_lanes(p, v, "x", "y", "z", lanes)
+                    v = dot_lanes(p, v, "x", "y", "z", lanes, **self.dot_params)
                     for t, k in self.lanes:     # X / 1024 as a value: X << 4
                         v[f"{'d' if t == 'l' else 's'}{k}"] = \
                             Cat(Const(0, 4), v.pop(f"_x{t}{k}"), Const(0, 2)).as_signed()

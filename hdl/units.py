@@ -1,15 +1,15 @@
 """The registry of units: name -> component class. The CLI, the tests and the Verilog export
 all go through it, so a unit registered here is exported, linted, simulated and described."""
 from .illum_unit import (BumpPolar, FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, Illum,
-                         TexelDecode)
+                         Peercy, TexelDecode)
 from .rotation_unit import Rotation
 from .shade_unit import Colour, Phong, PowerTable
 from .span_unit import Raster
 from .unit import Unit
 
 UNITS = {cls.NAME: cls for cls in (TexelDecode, FenneyPower, FenneyDot, FenneyXZ, FenneyPolar,
-                                   Illum, Rotation, BumpPolar, Raster, Phong, PowerTable,
-                                   Colour)}
+                                   Illum, Rotation, BumpPolar, Peercy, Raster, Phong,
+                                   PowerTable, Colour)}
 
 
 # Composed designs: built by make_unit and every simulator like a unit, not listed as units.

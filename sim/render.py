@@ -18,16 +18,17 @@ from hdl.units import make_unit
 
 from .verilog import BUILD, SCENES
 
-__all__ = ["render", "compare", "gallery"]
+__all__ = ["render", "compare", "flip", "gallery"]
 
 
 def compare(a, cov_a, b, cov_b):
-    """max_abs, psnr_db and pixels_over_1 over the pixels both cover (8-bit levels), and the
-    pixels only one covers."""
+    """max_abs, psnr_db, pixels_over_1 and the share within 1 level over the pixels both cover
+    (8-bit levels), and the pixels only one covers."""
     both = cov_a & cov_b
     d = np.abs(a[both].astype(np.int64) - b[both].astype(np.int64))
     mse = float(np.mean(d.astype(float) ** 2)) if d.size else 0.0
     return {"max_abs": int(d.max()) if d.size else 0,
+            "within_1": round(float((d.max(-1) <= 1).mean()), 4) if d.size else 1.0,
             "psnr_db": round(10 * np.log10(255.0 ** 2 / mse), 2) if mse > 0 else float("inf"),
             "pixels_over_1": int((d.max(-1) > 1).sum()) if d.size else 0,
             "coverage_mismatch": int((cov_a ^ cov_b).sum())}
@@ -56,8 +57,21 @@ def save_diff(path, rtl, ref, cov, title):
     plt.close(fig)
 
 
-def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=False):
-    """Render a scene; writes the five files of scenes.md and returns the metrics."""
+def flip(test, ref, cov):
+    """Mean FLIP (NVIDIA's perceptual error, flip-evaluator, LDR sRGB at 67 pixels per degree)
+    over the pixels both images cover."""
+    import flip_evaluator
+    emap, _, _ = flip_evaluator.evaluate(ref.astype(np.float32) / 255, test.astype(np.float32)
+                                         / 255, "LDR", applyMagma=False)
+    emap = np.asarray(emap).reshape(cov.shape)
+    return round(float(emap[cov].mean()), 5) if cov.any() else 0.0
+
+
+def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=False,
+           hardware=None):
+    """Render a scene; writes the five files of scenes.md and returns the metrics.
+    ``hardware``: pipeline parameters that are not scene keys (``make tradeoffs``'s knobs:
+    the reciprocal, the power table's bits, fenney_dot's renormalisation)."""
     from .__main__ import simulate
     scene = S.load(scene_path)
     if size:
@@ -66,6 +80,9 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     out_dir = Path(out_dir or BUILD / "render" / scene["name"])
     out_dir.mkdir(parents=True, exist_ok=True)
     prep = S.prepare(scene)
+    if hardware:
+        prep["params"] = {**prep["params"], **hardware}
+        prep["pipeline"] = make_unit("scene", spec=True, **prep["params"])
     pipe, params = prep["pipeline"], prep["params"]
     if simulator == "verilator":                # build (or find) the model before timing
         from .batch import build
@@ -115,7 +132,9 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
                             "uniforms": prep["uniforms"]},
                "units": units,
                "rtl_vs_model": compare(rtl, cov, model, mcov),
-               "rtl_vs_reference": {k: vs_ref[k] for k in ("psnr_db", "max_abs")},
+               "rtl_vs_reference": {**{k: vs_ref[k] for k in ("psnr_db", "max_abs",
+                                                              "within_1")},
+                                    "flip": flip(rtl, ref, cov & rcov)},
                "model_vs_reference": {k: v for k, v in compare(model, mcov, ref, rcov).items()
                                       if k in ("psnr_db", "max_abs")}}
     (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
@@ -127,7 +146,7 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
               f"  RTL vs model: max {rm['max_abs']} levels, {rm['pixels_over_1']} pixels over 1, "
               f"coverage mismatch {rm['coverage_mismatch']}; RTL vs reference: "
               f"{rr['psnr_db']} dB (model: {metrics['model_vs_reference']['psnr_db']} dB), "
-              f"max {rr['max_abs']}\n"
+              f"max {rr['max_abs']}, FLIP {rr['flip']}\n"
               f"  wrote {', '.join(f'{out_dir}/{f}' for f in ('rtl.png', 'model.png', 'reference.png', 'diff.png', 'metrics.json'))}")
     return metrics
 

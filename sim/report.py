@@ -26,6 +26,8 @@ SEED_COUNTS = {
     "rotation": "seed 003 Fig 7: 3 multipliers, about 8 adders, 6 tables",
     "bump_polar": "seed 003 Table 1, setup (two rotations): 6 multipliers, 12 LUTs, 16 adders;"
                   " illumination: 2 multipliers, 8 LUTs, 11 adders",
+    "peercy": "seed 003 Table 1, Peercy's setup: 27 multipliers, 9 division units, 3 SQRTs, "
+              "18 adders (illumination: not available)",
 }
 # Variants reported beside the defaults: (label, unit, parameters).
 VARIANTS = [("rotation exact", "rotation", {"method": "exact"})]

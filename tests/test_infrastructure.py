@@ -92,8 +92,8 @@ def test_registry_json_contract():
         assert set(unit["param_ranges"]) == set(unit["params"])
     names = {u["name"] for u in units}
     assert names == {"texel_decode", "fenney_power", "fenney_dot", "fenney_xz", "fenney_polar",
-                     "illum", "rotation", "bump_polar", "raster", "phong", "power_table",
-                     "colour"}
+                     "illum", "rotation", "bump_polar", "peercy", "raster", "phong",
+                     "power_table", "colour"}
     raster = next(u for u in units if u["name"] == "raster")      # screen and reciprocal
     assert {"screen_bits", "sub_bits", "channels", "modes", "recip", "recip_iters"} \
         <= set(raster["params"])

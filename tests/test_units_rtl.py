@@ -21,6 +21,7 @@ CONFIGS = [("texel_decode", {}), ("fenney_power", {}), ("fenney_dot", {}),
                          "prop_bits": 10}),
            ("rotation", {"method": "exact"}),
            ("bump_polar", {}),
+           ("peercy", {}),
            ("phong", {}),
            ("power_table", {"shininess": 128.0}),
            ("colour", {})]

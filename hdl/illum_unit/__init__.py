@@ -7,5 +7,7 @@ from .fenney_xz import FenneyXZ
 from .fenney_polar import FenneyPolar
 from .illum import Illum
 from .bump_polar import BumpPolar
+from .peercy import Peercy
 
-__all__ = ["TexelDecode", "FenneyPower", "FenneyDot", "FenneyXZ", "FenneyPolar", "Illum", "BumpPolar"]
+__all__ = ["TexelDecode", "FenneyPower", "FenneyDot", "FenneyXZ", "FenneyPolar", "Illum", "BumpPolar",
+           "Peercy"]

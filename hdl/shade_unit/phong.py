@@ -39,38 +39,56 @@ def phong_lanes(p, v, vectors, iters, seed_bits=8):
     stage (s16 operands: one DSP each)."""
     v = p.stage(v)          # the operands registered here, beside the 19 DSPs they feed
     n = [v.pop(k) for k in ("nx", "ny", "nz")]
-    frac2 = 2 * VALUE.frac_bits
     prods = {f"_q{a}": n[a] * n[a] for a in range(3)}
     for *keys, out in vectors:
         prods.update({f"_p{a}_{out}": n[a] * v.pop(k) for a, k in enumerate(keys)})
     v = p.stage(v, **prods)
-    sums = {"_q": (v.pop("_q0") + v.pop("_q1") + v.pop("_q2")) >> frac2 - Q_FRAC}
+    sums = {"_q": v.pop("_q0") + v.pop("_q1") + v.pop("_q2")}
     for *_, out in vectors:
         sums[f"_dot_{out}"] = v.pop(f"_p0_{out}") + v.pop(f"_p1_{out}") + v.pop(f"_p2_{out}")
     v = p.stage(v, **sums)
-    # dot products: round to DOT_FRAC fraction bits, saturate to s17
-    lim = (1 << DOT_FRAC + 1) - 1
-    new = {}
-    for *_, out in vectors:
-        d = (v.pop(f"_dot_{out}") + (1 << frac2 - DOT_FRAC - 1)) >> frac2 - DOT_FRAC
-        new[f"_dot_{out}"] = Mux(d > lim, lim, Mux(d < -lim - 1, -lim - 1, d))[:DOT_FRAC + 2] \
-            .as_signed()
     q = v.pop("_q")
-    v = p.stage(v, _q=Mux(q < Q_FLOOR, Q_FLOOR, q)[:Q_BITS], **new)
+    v = p.stage(v, _q=clamp_q(q), **{f"_dot_{out}": round_dot(v.pop(f"_dot_{out}"))
+                                     for *_, out in vectors})
     q = v.pop("_q")
-    # even shift: leading one at bit 20 or 21 -> e = 0; 18-19 -> 1; 16-17 -> 2
-    e = Mux(q[Q_BITS - 2:].any(), 0, Mux(q[Q_BITS - 4:Q_BITS - 2].any(), 1, 2))
+    e = even_shift(q)
     v = p.stage(v, _m=(q << (2 * e))[:Q_BITS], _e=e)
     v = arith.rsqrt(p, v, "_m", Q_BITS, G_FRAC, iters, seed_bits, out="_g")
     v.pop("_m")
     g = v.pop("_g")
-    v = p.stage(v, **{f"_pr_{key}": v.pop(f"_dot_{key}") * g for *_, key in vectors})
+    return scale_lanes(p, v, {f"_dot_{key}": (g, "_e", key) for *_, key in vectors})
+
+
+def round_dot(d, frac=2 * VALUE.frac_bits):
+    """A dot product of VALUEs (``frac`` fraction bits) rounded to DOT_FRAC bits, saturated
+    to s17."""
+    lim = (1 << DOT_FRAC + 1) - 1
+    d = (d + (1 << frac - DOT_FRAC - 1)) >> frac - DOT_FRAC
+    return Mux(d > lim, lim, Mux(d < -lim - 1, -lim - 1, d))[:DOT_FRAC + 2].as_signed()
+
+
+def clamp_q(q, frac=2 * VALUE.frac_bits):
+    """|v|^2 (``frac`` fraction bits) truncated to Q_FRAC bits and held in [1/16, 4)."""
+    q = q >> frac - Q_FRAC
+    return Mux(q < Q_FLOOR, Q_FLOOR, Mux(q >= 1 << Q_BITS, (1 << Q_BITS) - 1, q))[:Q_BITS]
+
+
+def even_shift(q):
+    """e with q 4^e in [1, 4): leading one at bit 20 or 21 -> 0; 18-19 -> 1; 16-17 -> 2."""
+    return Mux(q[Q_BITS - 2:].any(), 0, Mux(q[Q_BITS - 4:Q_BITS - 2].any(), 1, 2))
+
+
+def scale_lanes(p, v, lanes):
+    """``out = dot g 2^e`` rounded to VALUE and saturated, for ``{dot: (g, e, out)}`` (``g``
+    a value, the other two keys): the product alone in its stage, then the round, then the
+    saturation (three stages). Consumes the dots and the shifts."""
+    v = p.stage(v, **{f"_pr_{key}": v.pop(dot) * g for dot, (g, _, key) in lanes.items()})
     shift = DOT_FRAC + G_FRAC - VALUE.frac_bits
-    e = v.pop("_e")
-    v = p.stage(v, **{f"_r_{key}": ((v.pop(f"_pr_{key}") << e) + (1 << shift - 1)) >> shift
-                      for *_, key in vectors})
+    es = {e: v.pop(e) for _, e, _ in lanes.values() if e in v}
+    v = p.stage(v, **{f"_r_{key}": ((v.pop(f"_pr_{key}") << es[e]) + (1 << shift - 1)) >> shift
+                      for g, e, key in lanes.values()})
     out = {}
-    for *_, key in vectors:
+    for _, _, key in lanes.values():
         r = v.pop(f"_r_{key}")
         out[key] = Mux(r > VALUE.max, VALUE.max, Mux(r < VALUE.min, VALUE.min, r))[:VALUE.width] \
             .as_signed()
