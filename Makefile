@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga clean
+.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga tradeoffs clean
 
 setup: $(STAMP)
 
@@ -58,6 +58,16 @@ report: setup
 SEEDS   ?= 5
 fpga: setup
 	$(PY) -m sim.fpga --seeds $(SEEDS) $(if $(UNIT),--units $(UNIT))
+
+# What accuracy costs: every knob's settings measured side by side (image error with FLIP,
+# unit error, latency, Fmax, ns per pixel, area, simulation time), the seeds' claims, Pareto
+# plots: build/tradeoffs/{tradeoffs.json,report.md,pareto_*.png}. Cached by Verilog hash.
+# make tradeoffs [QUICK=1] [DASK=tcp://scheduler:8786] [SEEDS=n]
+QUICK   ?=
+DASK    ?=
+tradeoffs: setup
+	$(PY) -m sim.tradeoffs $(if $(QUICK),--quick) $(if $(DASK),--dask $(DASK)) \
+		$(if $(filter command line,$(origin SEEDS)),--seeds $(SEEDS))
 
 # Method errors (Fenney units, seed 003's rotation) with plots in build/accuracy/.
 accuracy: setup

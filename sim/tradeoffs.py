@@ -300,7 +300,7 @@ def measure(cfg, opts):
     """One row: every column this configuration has. Runs in a worker; cached by row_key."""
     key = row_key(cfg, opts)
     cache = OUT / "cache" / f"{key}.json"
-    if cache.exists():
+    if opts.get("cache", True) and cache.exists():
         return {**json.loads(cache.read_text()), "cached": True}
     from hdl.units import make_unit
     row = {k: cfg[k] for k in ("knob", "setting", "default", "scene", "hardware", "design")}
@@ -323,8 +323,9 @@ def measure(cfg, opts):
                                         / row["fmax_mhz"], 3)
     if cfg["unit"]:
         row.update(_unit_error(cfg["unit"], opts["simulator"]))
-    cache.parent.mkdir(parents=True, exist_ok=True)
-    cache.write_text(json.dumps(row, indent=1))
+    if opts.get("cache", True):
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        cache.write_text(json.dumps(row, indent=1))
     return {**row, "cached": False}
 
 

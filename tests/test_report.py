@@ -11,3 +11,12 @@ def test_illumination_has_table_1s_multipliers_and_luts(tmp_path):
     """Seed 003 Table 1: 2 multipliers and 8 LUTs (6 cosine tables, diffuse, specular)."""
     c = count("illum", work=tmp_path)
     assert (c["mul"], c["const_mul"], c["tables"]) == (2, 0, 8)
+
+
+def test_peercy_baseline_counts(tmp_path):
+    """The Cartesian baseline (seed 003 Table 1's Peercy): two 3x3 matrix-vector products (18
+    multipliers), |L_t|^2, |H_t|^2 and the two dot products with the bump normal (12), and one
+    scaling multiply per output (2); the normalisation a reciprocal square root table per
+    vector (2 look-ups) instead of 9 dividers and 3 square roots."""
+    c = count("peercy", work=tmp_path)
+    assert (c["mul"], c["const_mul"], c["tables"]) == (32, 0, 2)
