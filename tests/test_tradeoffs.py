@@ -61,7 +61,7 @@ def test_report_answers_and_claims_from_rows(tmp_path):
                                            ("phong", 45.0, 400, 5, 10.0, 110.0, 1.0, None))]
     text = T.write(rows, tmp_path, {"seeds": 1, "simulator": "verilator"}, 1.0).read_text()
     assert "**Cheapest within 1 level of Phong**" in text and "shading = xshading" in text
-    assert "**Fastest:** shading = xshading: 8.0 ns" in text
+    assert "**Fastest pipeline:** shading = xshading: 8.0 ns" in text
     assert "linear → xshading: +10.00 dB for +100 LUT4" in text
     assert "X-shading 88, exact mid-edges 104 (1.18x)" in text and "refuted" in text
     assert (tmp_path / "pareto_cost.png").stat().st_size > 0
