@@ -419,8 +419,9 @@ def pareto(points):
 
 
 def plots(rows, out):
-    """Image error (100 - PSNR: lower is better) against cost, time and simulation time, on
-    the default scene's geometry; the Pareto front joined, the defaults labelled."""
+    """PSNR against cost, time and simulation time, on the default scene's geometry; each
+    knob's Pareto front joined (a knob's designs are of one kind: whole pipelines for the
+    shading method, one unit otherwise), the defaults labelled."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -446,9 +447,10 @@ def plots(rows, out):
                             (fx(r), r["psnr_db"]), fontsize=7, xytext=(4, 3),
                             textcoords="offset points",
                             weight="bold" if r["default"] else "normal")
-        front = pareto([(fx(r), -r["psnr_db"]) for r in have])
-        ax.plot([fx(have[i]) for i in front], [have[i]["psnr_db"] for i in front], "k--",
-                lw=1, label="Pareto front", zorder=2)
+            front = pareto([(fx(r), -r["psnr_db"]) for r in sel])     # within the knob:
+            ax.plot([fx(sel[i]) for i in front], [sel[i]["psnr_db"] for i in front], "--",
+                    color=f"C{k}", lw=1, zorder=2)     # designs of one kind compare
+        ax.plot([], [], "k--", lw=1, label="Pareto front (per knob)")
         ax.set(xlabel=label, ylabel="PSNR against the reference (dB, default scene)",
                title=f"What accuracy costs: error against {name.replace('_', ' ')}")
         ax.legend(fontsize=8)
