@@ -62,6 +62,15 @@ class Schedule:
             self.phase.append(r)
         return self.phase[k]
 
+    def busy(self):
+        """High while a job is at an offset past its first (1 .. length - 1), from a register:
+        the OR of the phase bits one offset earlier, captured with them (exact, since they
+        shift with ``en``). Call after :meth:`finish`."""
+        r = Signal(name=f"{self.name}_busy")
+        with self.m.If(self.en):
+            self.m.d.sync += r.eq(_or_tree([self.at(k) for k in range(self.length - 1)]))
+        return r
+
     def _when(self, *values, after=0):
         k = after
         for v in values:
@@ -136,17 +145,21 @@ class Schedule:
         self._read(k, a, b)
         total, lat = self._total(idx), self.lat
         if shifted:                       # the amount is read with the product's sum
-            total, lat = self._shifted(idx), self.lat + 2
-            self._read(k + self.lat, self.shift[0])
+            amount = self.late(self.shift[0], k + self.lat)
+            total, lat = self._shifted(idx, amount), self.lat + 2
+            self._read(k + self.lat, amount)
         self.length = max(self.length, k + lat + 1)
         value = post(total) if post else total[:natural].as_signed()
         return self._write(name, value, k + lat, shape)
 
-    def _shifted(self, idx):
+    def _shifted(self, idx, amount):
         if not hasattr(self, "_shifters"):
             self._shifters = {}
+        if idx in self._shifters and self._shifters[idx][0] is not amount:
+            raise ValueError(f"{self.name}: multiplier {idx}'s shifted products read the "
+                             f"amount from different copies")
         if idx not in self._shifters:
-            amount, left = self.shift
+            left = self.shift[1]
             total = self._total(idx)
             coarse = Signal(signed(len(total) + left), name=f"{self.name}_m{idx}_coarse",
                             reset_less=True)
@@ -156,8 +169,8 @@ class Schedule:
             with self.m.If(self.en):            # two stages: by amount's high bits, then low
                 self.m.d.sync += [coarse.eq((total << left) >> Cat(Const(0, 3), amount[3:])),
                                   low.eq(amount[:3]), reg.eq(coarse >> low)]
-            self._shifters[idx] = reg
-        return self._shifters[idx]
+            self._shifters[idx] = amount, reg
+        return self._shifters[idx][1]
 
     def _total(self, idx):
         if not hasattr(self, "_totals"):

@@ -166,7 +166,11 @@ class Setup:
                     j0=j["j0"], jm=Mux(j["j1"] < j["j0"], j["j0"],
                                        Mux(j["j1"] > j["j2"], j["j2"], j["j1"])), j1=j["j2"])
         x1, y1, x2, y2 = r["x1"], r["y1"], r["x2"], r["y2"]
-        out = {"tri": tri, "xt": xt, "yt": yt, "j0": r["j0"], "jm": r["jm"], "j1": r["j1"]}
+        out = {"tri": tri, "xt": xt, "yt": yt, "j0": r["j0"]}
+        # the walker counts down the rows after its current one to j1 and to jm; it starts
+        # from these, and from their tests for zero (its first row is the last, or jm's)
+        left = sc.lets(to_j1=r["j1"] - r["j0"] - 1, to_jm=r["jm"] - r["j0"] - 1)
+        out.update(left, **sc.lets(last0=left["to_j1"] == 0, at_jm0=left["to_jm"] == 0))
         om = sc.let("omega", sc.mul("x1y2", x1, y2) - sc.mul("x2y1", x2, y1))
         # each edge's first column: ceil(((2 px - S) dy + (2 S j + S - 2 py) dx) / (2 S dy))
         # (the row's crossing minus half a pixel), a floor division of num + den - 1

@@ -100,9 +100,7 @@ class Raster(Unit):
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o)
         busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | running
-                | done)
-        for k in range(1, re.length):
-            busy = busy | re.at(k)
+                | done | re.busy())
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
         self._timing = (sc.length, re.ii, re.length)
         return m

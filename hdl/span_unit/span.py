@@ -50,7 +50,8 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left).
     ``src_valid_next``: the setup's valid in the next clock (the walker registers its load)."""
     have = Signal()
-    j, j1, jm = Signal(w.wrow), Signal(w.wrow), Signal(w.wrow)
+    j = Signal(w.wrow)
+    to_j1, to_jm = (Signal(signed(w.wrow + 1), name=f"w_{k}") for k in ("to_j1", "to_jm"))
     left_long = Signal()
     keep = ["tri", "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels)
                                   for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")]
@@ -70,7 +71,7 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     # so that each drives its hundreds of enables straight from a flop.
     full = Signal(name="w_full")
     accept, load = Signal(name="w_accept"), Signal(name="w_load")
-    last, at_jm = Signal(), Signal()           # j + 1 == j1, j + 1 == jm (registered)
+    last, at_jm = Signal(), Signal()           # to_j1 == 0, to_jm == 0 (registered)
     rows = src["rows"]                         # not culled, j0 < j1 (the setup's register)
     have_n = Mux(load, rows, have & ~(accept & last))
     full_n = accept | (full & ~out_link.ready)
@@ -84,9 +85,9 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
                 "d": src[f"{e}_d"], "n": src[f"{e}_n0"][:len(src[f"{e}_n"])]}
 
     with m.If(load):
-        m.d.sync += [j.eq(src["j0"]), j1.eq(src["j1"]), jm.eq(src["jm"]),
-                     left_long.eq(src["left_long"]), last.eq(src["j0"] + 1 == src["j1"]),
-                     at_jm.eq(src["j0"] + 1 == src["jm"])]
+        m.d.sync += [j.eq(src["j0"]), to_j1.eq(src["to_j1"]), to_jm.eq(src["to_jm"]),
+                     left_long.eq(src["left_long"]), last.eq(src["last0"]),
+                     at_jm.eq(src["at_jm0"])]
         m.d.sync += [held[k].eq(src[k]) for k in keep]
         first_short = src["first_short"]
         for e in ("l", "t"):
@@ -98,7 +99,8 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
         with m.If(src["cull"]):
             m.d.sync += culled.eq(culled + 1)
     with m.Elif(accept):
-        m.d.sync += [j.eq(j + 1), last.eq(j + 2 == j1), at_jm.eq(j + 2 == jm)]
+        m.d.sync += [j.eq(j + 1), to_j1.eq(to_j1 - 1), to_jm.eq(to_jm - 1),
+                     last.eq(to_j1 == 1), at_jm.eq(to_jm == 1)]     # compares, not sums
         li, lr = _step(*(edge["l"][k] for k in "irqdn"))
         m.d.sync += [edge["l"]["i"].eq(li), edge["l"]["r"].eq(lr)]
         si, sr = _step(*(edge["s"][k] for k in "irqdn"))
@@ -136,7 +138,7 @@ def row_engine(m, w, channels, rows, row_link, space, platform=None):
     mults = channels + 1
     ii = -(-(2 + 7 * channels) // mults)
     out_valid = Signal(name="re_out_valid")
-    sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, platform=platform)
+    sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
                  row_link.ready.eq(sc.aligned & space)]
     v = {k: sc.input(k, val) for k, val in rows.items()}
@@ -145,8 +147,7 @@ def row_engine(m, w, channels, rows, row_link, space, platform=None):
     border = v["xl"] < 0                          # the span starts at column 0: its track
     num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
            for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
-    v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), sh=v["sh"], **num))  # sh: read
-    # by the shifters at the products' sums, within ii of this copy
+    v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), **num))
     sc.shift = (v["sh"], w.FQ - w.R)
     fq = lambda x: x[:OPERAND].as_signed()
     u = sc.mul("u", v["nu"], v["rs"], post=fq, shifted=True)
