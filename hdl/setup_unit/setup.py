@@ -27,6 +27,15 @@ G_FRAC = 30        # fraction bits of g = 1/||Ni + Nj|| while it is computed (27
 __all__ = ["Widths", "Setup"]
 
 
+def _halves(a, b):
+    """``a < b`` and ``a == b`` of each half (the high one by its sign): two short carry
+    chains in place of one long one."""
+    h = len(a) // 2
+    hi = lambda x: x[h:].as_signed() if x.shape().signed else x[h:]
+    return {"lt_hi": hi(a) < hi(b), "eq_hi": hi(a) == hi(b), "lt_lo": a[:h] < b[:h],
+            "eq_lo": a[:h] == b[:h]}
+
+
 @dataclass(frozen=True)
 class Widths:
     """Fraction bits, derived in docs/quadratic.md ("Widths from analysis") for spans of up to
@@ -113,15 +122,21 @@ class Setup:
         y = [v.pop(f"y{k}") for k in range(3)]
 
         # Vertex a before b (a < b): y_a < y_b, or equal y and x_a <= x_b (the index breaks
-        # ties); b before a is the complement. The compares are registered alone, next to
-        # their carry chains, and the ranks from them a clock later.
+        # ties); b before a is the complement. Each compare is split into its two halves,
+        # registered alone next to their short carry chains; "a before b" from them a clock
+        # later, and the ranks a clock after that.
         pairs = ((0, 1), (0, 2), (1, 2))
-        cmp = sc.lets(**{k: val for a, b in pairs for k, val in
-                         ((f"ylt{a}{b}", y[a] < y[b]), (f"yeq{a}{b}", y[a] == y[b]),
-                          (f"xle{a}{b}", x[a] <= x[b]))})
+        cmp = sc.lets(**{f"{n}{a}{b}_{k}": val for a, b in pairs
+                         for n, val in (("y", _halves(y[a], y[b])), ("x", _halves(x[a], x[b])))
+                         for k, val in val.items()})
         lt = {}
         for a, b in pairs:
-            lt[a, b] = cmp[f"ylt{a}{b}"] | (cmp[f"yeq{a}{b}"] & cmp[f"xle{a}{b}"])
+            c = {f"{n}{k}": cmp[f"{n}{a}{b}_{k}"] for n in "xy"
+                 for k in ("lt_hi", "eq_hi", "lt_lo", "eq_lo")}
+            ylt = c["ylt_hi"] | (c["yeq_hi"] & c["ylt_lo"])
+            yeq = c["yeq_hi"] & c["yeq_lo"]
+            xle = c["xlt_hi"] | (c["xeq_hi"] & (c["xlt_lo"] | c["xeq_lo"]))
+            lt[a, b] = sc.let(f"lt{a}{b}", ylt | (yeq & xle))
             lt[b, a] = ~lt[a, b]
         rank = sc.lets(**{f"rank{k}": sum((lt[o, k] for o in range(3) if o != k), Const(0, 2))
                           for k in range(3)})
