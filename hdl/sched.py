@@ -16,7 +16,8 @@ the result is written at ``issue + MUL_LAT`` (one more with ``mux_groups``) and 
 clock later.
 """
 from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
-from amaranth.hdl._ast import SignalDict, SignalSet   # Signals are not hashable
+from amaranth.hdl._ast import Concat, Operator, SignalDict, SignalSet, Slice  # Signals
+# are not hashable; the node types tell an operand's wiring from its logic
 from amaranth.lib.memory import Memory
 
 from .dsp import mult18
@@ -116,7 +117,10 @@ class Schedule:
 
     def mul(self, name, a, b, post=None, shape=None, after=0, shifted=False):
         """``post(a * b)`` in a register (``a``, ``b``: signed, at most OPERAND bits)."""
-        a, b = Value.cast(a), Value.cast(b)
+        # an operand with logic in it (a negation, a sum) is registered first: the operand
+        # multiplexer's inputs are wiring only, so no carry chain runs into it
+        a, b = (Value.cast(x) if _wiring(x) else self.let(f"{name}_{s}", x)
+                for x, s in ((a, "a"), (b, "b")))
         natural = len(a) + len(b)
         for x in (a, b):
             if len(x) + (0 if x.shape().signed else 1) > OPERAND:
@@ -300,6 +304,23 @@ class Schedule:
             r = self.reads.get(reg, w)
             if r > w + self.ii and reg not in self.outputs:
                 raise AssertionError(f"{reg.name}: written at {w}, read at {r}, ii {self.ii}")
+
+
+def _wiring(value):
+    """``value`` is registers and constants, sliced, concatenated, cast or shifted by
+    constants: no logic."""
+    v = Value.cast(value)
+    if isinstance(v, (Signal, Const)):
+        return True
+    if isinstance(v, Slice):
+        return _wiring(v.value)
+    if isinstance(v, Concat):
+        return all(_wiring(p) for p in v.parts)
+    if isinstance(v, Operator) and v.operator in ("s", "u"):
+        return _wiring(v.operands[0])
+    if isinstance(v, Operator) and v.operator in ("<<", ">>"):
+        return isinstance(v.operands[1], Const) and _wiring(v.operands[0])
+    return False
 
 
 def _key(value):
