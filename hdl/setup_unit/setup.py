@@ -221,7 +221,9 @@ class Setup:
             out[f"{e}_{'r' if kind == 'i' else 'd'}"] = rem
         for e in EDGES:      # the walker's start values (it holds r - d and n - d: span.py)
             n, rem, d = out[f"{e}_n"], out[f"{e}_r"], out[f"{e}_d"]
-            out.update(sc.lets(**{f"{e}_r0": n - 1 - rem - d, f"{e}_n0": n - d}))
+            n0 = out[f"{e}_n0"] = sc.let(f"{e}_n0", n - d)
+            # n - 1 - rem - d = n0 + ~rem (-1 - rem = ~rem): two operands, not three
+            out[f"{e}_r0"] = sc.let(f"{e}_r0", n0 + ~Cat(rem, Const(0, 1)).as_signed())
         out.update(self._tracks(sc, r, out, xt, yt))
         # alpha per pixel step: S y2 / Omega, -S y1 / Omega (eq 20), s(35, 34) saturated
         lo, hi = -(1 << w.FA), (1 << w.FA) - 1
