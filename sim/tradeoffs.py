@@ -189,6 +189,11 @@ def _area(design, seeds):
     fmax = []
     for name, params in design:
         for device in ("ecp5", "ice40"):
+            if device == "ice40" and not out["fits_ecp5"]:
+                # the UP5K is smaller than the 25F in every resource (LUT4, multipliers, RAM
+                # bits): what does not fit the one cannot fit the other, so it is not synthesised
+                out["fits_up5k"] = False
+                continue
             with _lock("fpga", name, params, device):
                 work, synth = fpga.synthesise(name, name, params, device)
                 runs = [fpga.place(work, device, s) for s in range(1, (seeds if device == "ecp5"
