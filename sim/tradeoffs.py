@@ -323,7 +323,10 @@ def measure(cfg, opts):
         row["yosys"] = {k: sum(c[k] for c in counts) for k in ("mul", "add", "tables",
                                                                 "table_bits", "flop_bits")}
     if opts["seeds"]:
-        row.update(_area(cfg["design"], opts["seeds"]))
+        try:
+            row.update(_area(cfg["design"], opts["seeds"]))
+        except RuntimeError as e:     # a design the flow cannot build: the row keeps the rest
+            row["area_error"] = str(e)
     if cfg["scene"] and opts["render"]:
         row.update(_image(cfg, opts["simulator"], key))
         if row.get("fmax_mhz"):
@@ -601,6 +604,8 @@ def write(rows, out, opts, wall):
           "on ECP5-25F -6 (synthesis counts where it does not fit); a shading method's design is "
           "every unit of its pipeline, summed, its Fmax the slowest unit's. ns/px = cycles per "
           "fragment on the scene / Fmax.", "", *table(rows), "",
+          *(f"- {r['knob']} = {r['setting']}: no area, the flow failed: {r['area_error']}"
+            for r in rows if r.get("area_error")), "",
           "## For a user choosing a configuration", "", *answers(rows), "",
           "## The seeds' claims, in hardware", "", *claims(rows), ""]
     md += [f"![{p.stem}]({p.name})" for p in figs]
