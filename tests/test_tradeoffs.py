@@ -59,6 +59,9 @@ def test_report_answers_and_claims_from_rows(tmp_path):
                                            ("xshading", 40.0, 200, 2, 8.0, 130.0, 0.995, 88),
                                            ("exact", 41.0, 300, 2, 8.5, 125.0, 0.999, 104),
                                            ("phong", 45.0, 400, 5, 10.0, 110.0, 1.0, None))]
+    rows += [dict(base, knob="reciprocal", setting=n, psnr_db=p, LUT4=l, MULT18X18D=4,
+                  unit_err_max=e, unit_err_p99=e, unit_err_mean=e)
+             for n, p, l, e in (("NR 0", 44.04, 90, 39.8), ("NR 2", 44.05, 120, 0.5))]
     rows.append(dict(base, knob="filter", setting="bilinear", psnr_db=20.0,
                      area_error="yosys on scene (ecp5) failed"))   # a design the flow cannot build
     text = T.write(rows, tmp_path, {"seeds": 1, "simulator": "verilator"}, 1.0).read_text()
@@ -66,6 +69,9 @@ def test_report_answers_and_claims_from_rows(tmp_path):
     assert "**Fastest pipeline:** shading = xshading: 8.0 ns" in text
     assert "linear → xshading: +10.00 dB for +100 LUT4" in text
     assert "X-shading 88, exact mid-edges 104 (1.18x)" in text and "refuted" in text
+    assert ("**reciprocal:** the same image within 0.1 dB (44.04-44.05 dB) at every setting; "
+            "what changes is the cost, LUT4 90-120, and the unit's own error (max: NR 0 39.8, "
+            "NR 2 0.5)") in text                   # no step in accuracy to price
     assert "- filter = bilinear: no area, the flow failed: yosys on scene (ecp5)" in text
     assert (tmp_path / "pareto_cost.png").stat().st_size > 0
     assert np.isclose(T._cost(rows[0]), 100 + 2 * T.DSP_LUT4)
