@@ -185,7 +185,7 @@ class Setup:
         # the walker counts down the rows after its current one to j1 and to jm; it starts
         # from these, and from their tests for zero (its first row is the last, or jm's)
         left = sc.lets(to_j1=r["j1"] - r["j0"] - 1, to_jm=r["jm"] - r["j0"] - 1)
-        out.update(left, **sc.lets(last0=left["to_j1"] == 0, at_jm0=left["to_jm"] == 0))
+        out.update(left, **sc.lets(last0=~left["to_j1"].any(), at_jm0=~left["to_jm"].any()))
         om = sc.let("omega", sc.mul("x1y2", x1, y2) - sc.mul("x2y1", x2, y1))
         # each edge's first column: ceil(((2 px - S) dy + (2 S j + S - 2 py) dx) / (2 S dy))
         # (the row's crossing minus half a pixel), a floor division of num + den - 1
