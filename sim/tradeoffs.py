@@ -500,7 +500,8 @@ def answers(rows):
                        key=lambda r: r.get("within_1_of_phong") or 0)
             lines.append(f"- **Cheapest within 1 level of Phong:** no other "
                          f"pipeline reaches 99 % of pixels within one level of the per-pixel "
-                         f"Phong reference (float64, exact power); the closest is {near['knob']} = {near['setting']} at "
+                         f"Phong reference (float64, exact power); the closest is "
+                         f"{near['knob']} = {near['setting']} at "
                          f"{100 * (near.get('within_1_of_phong') or 0):.1f} %.")
     timed = [r for r in shade if r.get("ns_per_pixel")]
     if timed:
