@@ -25,6 +25,8 @@ from .dsp import mult18
 __all__ = ["Schedule", "OPERAND", "MUL_LAT"]
 
 OPERAND = 35          # signed operand bits: an 18-bit signed top slice, a 17-bit unsigned low one
+LOGIC_ROM = 256       # tables up to this deep are logic, not block RAM (``Schedule.rom``)
+CAPTURE_SHARE = 256   # enables per copy of a capture enable (``Schedule.inputs``)
 MUL_LAT = 4           # issue (operands muxed) -> operand regs -> partial products -> two adds
 
 
@@ -85,18 +87,34 @@ class Schedule:
                 if s in self.ready:
                     self.reads[s] = max(self.reads.get(s, 0), k)
 
-    def _write(self, name, value, k, shape=None):
+    def _write(self, name, value, k, shape=None, en=None):
         value = Value.cast(value)
         reg = Signal(shape or value.shape(), name=f"{self.name}_{name}", reset_less=True)
-        with self.m.If(self.en & self.at(k)):
+        with self.m.If(self.en & self.at(k) if en is None else en):
             self.m.d.sync += reg.eq(value)
         self.ready[reg], self.written[reg] = k + 1, k
         self.length = max(self.length, k + 1)
         return reg
 
-    def input(self, name, value, shape=None):
-        """``value`` (stable while ``start`` is high) captured at the job's start."""
-        return self._write(name, value, 0, shape)
+    def input(self, name, value, shape=None, en=None):
+        """``value`` (stable while ``start`` is high) captured at the job's start; or, with
+        ``en``, whenever ``en`` is high: a register, high at every start and never while an
+        earlier job may still read the input (the unit's ready, or ``aligned``), so that the
+        capture enables wait on no handshake. ``en`` may be one of several copies
+        (:meth:`aligned_copy`), each driving a share of the enables."""
+        return self._write(name, value, 0, shape, en)
+
+    def inputs(self, values, copy=None, share=CAPTURE_SHARE):
+        """:meth:`input` of each of ``values`` (a dict); with ``copy`` (a function that makes
+        a copy of a capture enable, such as :meth:`aligned_copy`), each copy captures about
+        ``share`` bits. Returns the registers."""
+        out, en, bits = {}, None, share
+        for name, value in values.items():
+            if copy is not None and bits >= share:
+                en, bits = copy(), 0
+            out[name] = self.input(name, value, en=en)
+            bits += len(out[name])
+        return out
 
     def let(self, name, value, shape=None, after=0):
         """A register of ``value``, written as soon as its operands are ready."""
@@ -187,8 +205,12 @@ class Schedule:
         is never in series with logic)."""
         k = self._when(addr)
         self._read(k, addr)
+        # a small table is logic (a few LUTs per output bit, in series with nothing): a block
+        # RAM's clock to output, 5.8 ns on ECP5 without its output register, is most of a clock
+        small = len(lut.contents) <= LOGIC_ROM
         mem = Memory(shape=unsigned(lut.fmt.width), depth=len(lut.contents),
-                     init=[int(v) & ((1 << lut.fmt.width) - 1) for v in lut.contents])
+                     init=[int(v) & ((1 << lut.fmt.width) - 1) for v in lut.contents],
+                     attrs={"rom_style": "logic"} if small else None)
         self.m.submodules[f"{self.name}_{name}_rom"] = mem
         port = mem.read_port()
         self.m.d.comb += [port.addr.eq(addr), port.en.eq(self.en & self.at(k))]
@@ -241,17 +263,27 @@ class Schedule:
         """With ``ii``: a job may start: ``ii`` clocks after the last start, or any time when
         no job is in flight."""
         if not hasattr(self, "_aligned"):
-            self._aligned = Signal(name=f"{self.name}_aligned", init=1)
-        return self._aligned
+            self._aligned = [Signal(name=f"{self.name}_aligned", init=1)]
+        return self._aligned[0]
+
+    def aligned_copy(self):
+        """A copy of ``aligned``, to drive a share of the enables of the inputs it captures.
+        One flop cannot drive a thousand enables in a clock (on ECP5 the routing alone takes
+        7-8 ns); copies can, but Yosys merges flops with equal inputs, so each copy is a state
+        machine of its own, with its own slot count: equal in value, never in structure."""
+        self.aligned                                        # the first is the start's
+        self._aligned.append(Signal(name=f"{self.name}_aligned{len(self._aligned)}", init=1))
+        return self._aligned[-1]
 
     def _align(self):
         """``aligned``, a register: the next clock's slot count is 0, or no job will be in
         flight then, so that nothing lies between it and the start it allows."""
-        count = Signal(range(self.ii), name=f"{self.name}_slot")
-        nxt = Mux(self.start, 1 % self.ii, Mux(count == self.ii - 1, 0, count + 1))
         idle = ~_or_tree([self.start] + [self.at(k) for k in range(1, self.length - 1)])
-        with self.m.If(self.en):
-            self.m.d.sync += [count.eq(nxt), self.aligned.eq(~nxt.any() | idle)]  # lint: no "== 0"
+        for n, aligned in enumerate(self._aligned):
+            count = Signal(range(self.ii), name=f"{self.name}_slot{n}")
+            nxt = Mux(self.start, 1 % self.ii, Mux(count == self.ii - 1, 0, count + 1))
+            with self.m.If(self.en):
+                self.m.d.sync += [count.eq(nxt), aligned.eq(~nxt.any() | idle)]  # no "== 0"
 
     def finish(self):
         if self.ii is not None:

@@ -178,8 +178,8 @@ class Setup:
         j = sc.lets(**{f"_j{k}": self.rows(v[f"y{k}"]) for k in range(3)})
         j = sc.lets(**{f"j{k}": clamp(j[f"_j{k}"]) for k in range(3)})
         r = sc.lets(x1=v["x1"] - xt, y1=v["y1"] - yt, x2=v["x2"] - xt, y2=v["y2"] - yt,
-                    j0=j["j0"], jm=Mux(j["j1"] < j["j0"], j["j0"],
-                                       Mux(j["j1"] > j["j2"], j["j2"], j["j1"])), j1=j["j2"])
+                    j0=j["j0"], jm=j["j1"], j1=j["j2"])   # sorted by y, and rows() and
+        # the clamp are monotonic: j0 <= j1 <= j2, the middle vertex's row is the middle one
         x1, y1, x2, y2 = r["x1"], r["y1"], r["x2"], r["y2"]
         out = {"tri": tri, "xt": xt, "yt": yt, "j0": r["j0"]}
         # the walker counts down the rows after its current one to j1 and to jm; it starts

@@ -76,30 +76,36 @@ class Raster(Unit):
         with m.If(self.i.valid & self.i.ready):
             m.d.sync += count.eq(count + 1)
         sc = Schedule(m, "su", Const(1), mux_groups=8, platform=platform)
-        running, done = Signal(), Signal()
-        src_ready = Signal()
         # ready from registers only: the next triangle starts a clock after the walker takes
-        # this one, and the capture enables (hundreds of registers) wait on no handshake
-        m.d.comb += [sc.start.eq(self.i.valid & self.i.ready),
-                     self.i.ready.eq(~running & ~done)]
-        v = {f.name: sc.input(f.name, self.i.payload[f.name]) for f in self.inputs}
-        v["tri"] = sc.input("tri", count)
+        # this one. The inputs are captured while the setup is idle (its ready), from copies
+        # of ready, each a state machine of its own (Schedule.aligned_copy says why)
+        idle = []
+
+        def idle_copy():
+            idle.append(Signal(name=f"su_idle{len(idle)}", init=1))
+            return idle[-1]
+        ready = idle_copy()
+        m.d.comb += [sc.start.eq(self.i.valid & ready), self.i.ready.eq(ready)]
+        v = sc.inputs({**{f.name: self.i.payload[f.name] for f in self.inputs}, "tri": count},
+                      copy=idle_copy)
         coef = setup.program(sc, v)
         sc.finish()
         last = sc.at(sc.length - 1)
-        with m.If(sc.start):
-            m.d.sync += running.eq(1)
-        with m.Elif(last):
-            m.d.sync += running.eq(0)
+        done, src_ready = Signal(), Signal()
         done_n = last | (done & ~src_ready)
         m.d.sync += done.eq(done_n)
+        running = []
+        for k, r in enumerate(idle):
+            running.append(Signal(name=f"su_running{k}"))
+            run_n = (self.i.valid & r) | (running[k] & ~last)
+            m.d.sync += [running[k].eq(run_n), r.eq(~run_n & ~done_n)]
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
         rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled)
         rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform)
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o)
-        busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | running
+        busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | running[0]
                 | done | re.busy())
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
         self._timing = (sc.length, re.ii, re.length)

@@ -23,7 +23,7 @@ Four parts, each a stream stage with backpressure:
 from amaranth.hdl import Cat, Const, Mux, Signal, signed
 from amaranth.lib.fifo import SyncFIFO
 
-from ..sched import OPERAND, Schedule
+from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule
 from ..setup_unit.formats import VALUE
 
 __all__ = ["Link", "walker", "row_engine", "row_queue", "stepper"]
@@ -49,7 +49,6 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     columns ``xl``, ``xr`` of row ``j``, unclamped, the numerator tracks of the left edge's
     first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left).
     ``src_valid_next``: the setup's valid in the next clock (the walker registers its load)."""
-    have = Signal()
     j = Signal(w.wrow)
     to_j1, to_jm = (Signal(signed(w.wrow + 1), name=f"w_{k}") for k in ("to_j1", "to_jm"))
     left_long = Signal()
@@ -59,24 +58,32 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     edge = {}
     for e in ("l", "s", "t"):
         edge[e] = {k: Signal.like(src[f"{e}_{k}"], name=f"w_{e}_{k}") for k in "iqdn"}
-        edge[e]["r"] = Signal(signed(len(src[f"{e}_n"]) + 1), name=f"w_{e}_r")   # r - d
+        edge[e]["r"] = Signal(signed(len(src[f"{e}_n"]) + 1), name=f"w_{e}_r",   # r - d
+                              reset_less=True)
     # numerator tracks: the left edge's first pixel (E), column 0 (B); their steps
-    tr = {k: Signal(w.wn, name=f"w_{k}") for k in
+    tr = {k: Signal(w.wn, name=f"w_{k}", reset_less=True) for k in
           ("E_u", "E_v", "B_u", "B_v", "s0_u", "s0_v", "s1_u", "s1_v", "e1_u", "e1_v",
            "t0_u", "t0_v", "t1_u", "t1_v", "bs_u", "bs_v")}
     # A row goes into a one-row buffer when it is empty (``full``, a register), so every
     # enable here comes from registers. The next triangle loads once the buffer's row (which
     # reads ``held``) has gone; with a row every ``ii`` >= 3 clocks that costs no throughput.
-    # ``load`` and ``accept`` are registers too, computed a clock early from the next state,
-    # so that each drives its hundreds of enables straight from a flop.
-    full = Signal(name="w_full")
-    accept, load = Signal(name="w_accept"), Signal(name="w_load")
+    # ``load`` and ``accept`` are registers too, computed a clock early from the next state.
+    # They drive about two thousand enables, so the state machine is copied: each copy drives
+    # a share (Schedule.aligned_copy says why copies must be state machines of their own).
     last, at_jm = Signal(), Signal()           # to_j1 == 0, to_jm == 0 (registered)
     rows = src["rows"]                         # not culled, j0 < j1 (the setup's register)
-    have_n = Mux(load, rows, have & ~(accept & last))
-    full_n = accept | (full & ~out_link.ready)
-    m.d.sync += [have.eq(have_n), full.eq(full_n), accept.eq(have_n & ~full_n),
-                 load.eq(src_valid_next & ~have_n & ~full_n)]
+
+    def control(k):
+        """A copy of the walker's state: (have, full, load, accept)."""
+        have, full = Signal(name=f"w_have{k}"), Signal(name=f"w_full{k}")
+        load, accept = Signal(name=f"w_load{k}"), Signal(name=f"w_accept{k}")
+        have_n = Mux(load, rows, have & ~(accept & last))
+        full_n = accept | (full & ~out_link.ready)
+        m.d.sync += [have.eq(have_n), full.eq(full_n), accept.eq(have_n & ~full_n),
+                     load.eq(src_valid_next & ~have_n & ~full_n)]
+        return have, full, load, accept
+
+    have, full, load, accept = control(0)
     m.d.comb += [src_ready.eq(~have & ~full), out_link.valid.eq(full)]
 
     def init(e):     # the walker's remainder i den - num from the setup's floor remainder,
@@ -84,18 +91,15 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
         return {"i": src[f"{e}_i"], "r": src[f"{e}_r0"], "q": src[f"{e}_q"],
                 "d": src[f"{e}_d"], "n": src[f"{e}_n0"][:len(src[f"{e}_n"])]}
 
-    with m.If(load):
+    with m.If(load):                           # the rows and the edges: copy 0
         m.d.sync += [j.eq(src["j0"]), to_j1.eq(src["to_j1"]), to_jm.eq(src["to_jm"]),
                      left_long.eq(src["left_long"]), last.eq(src["last0"]),
                      at_jm.eq(src["at_jm0"])]
-        m.d.sync += [held[k].eq(src[k]) for k in keep]
         first_short = src["first_short"]
         for e in ("l", "t"):
             m.d.sync += [edge[e][k].eq(val) for k, val in init(e).items()]
         s_init, t_init = init("s"), init("t")
         m.d.sync += [edge["s"][k].eq(Mux(first_short, t_init[k], s_init[k])) for k in "irqdn"]
-        m.d.sync += [tr[k].eq(src[k]) for k in tr if k[0] not in "EB"]
-        m.d.sync += [tr[f"{t}_{a}"].eq(src[f"{t.lower()}0_{a}"]) for t in "EB" for a in "uv"]
         with m.If(src["cull"]):
             m.d.sync += culled.eq(culled + 1)
     with m.Elif(accept):
@@ -104,13 +108,18 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
         li, lr = _step(*(edge["l"][k] for k in "irqdn"))
         m.d.sync += [edge["l"]["i"].eq(li), edge["l"]["r"].eq(lr)]
         si, sr = _step(*(edge["s"][k] for k in "irqdn"))
-        carry = Mux(left_long, edge["l"]["r"][-1], edge["s"]["r"][-1])     # r < d
-        switch = ~left_long & at_jm
         with m.If(at_jm):
             m.d.sync += [edge["s"][k].eq(edge["t"][k]) for k in "irqdn"]
         with m.Else():
             m.d.sync += [edge["s"]["i"].eq(si), edge["s"]["r"].eq(sr)]
-        for a in "uv":
+    carry = Mux(left_long, edge["l"]["r"][-1], edge["s"]["r"][-1])     # r < d
+    switch = ~left_long & at_jm
+    for n, a in enumerate("uv"):               # the tracks: a copy for each of u, v
+        _, _, load_a, accept_a = control(1 + n)
+        with m.If(load_a):
+            m.d.sync += [tr[k].eq(src[k]) for k in tr if k[0] not in "EB" and k[-1] == a]
+            m.d.sync += [tr[f"{t}_{a}"].eq(src[f"{t.lower()}0_{a}"]) for t in "EB"]
+        with m.Elif(accept_a):
             m.d.sync += tr[f"B_{a}"].eq(tr[f"B_{a}"] + tr[f"bs_{a}"])
             with m.If(switch):
                 m.d.sync += [tr[f"E_{a}"].eq(tr[f"e1_{a}"]), tr[f"s0_{a}"].eq(tr[f"t0_{a}"]),
@@ -118,11 +127,20 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
             with m.Else():
                 m.d.sync += tr[f"E_{a}"].eq(Mux(carry, tr[f"E_{a}"] + tr[f"s1_{a}"],   # both
                                                 tr[f"E_{a}"] + tr[f"s0_{a}"]))  # sums, then pick
+    bits = 3 * SHARE
+    for k in keep:                             # the triangle's constants: a copy per share
+        if bits >= SHARE:
+            _, _, load_k, _ = control(f"_{k}")
+            bits = 0
+        with m.If(load_k):
+            m.d.sync += held[k].eq(src[k])
+        bits += len(held[k])
     row = {"j": j, "xl": Mux(left_long, edge["l"]["i"], edge["s"]["i"]),
            "xr": Mux(left_long, edge["s"]["i"], edge["l"]["i"]),
            **{k: tr[k] for k in ("E_u", "E_v", "B_u", "B_v")}}
-    buf = {k: Signal.like(x, name=f"wb_{k}") for k, x in row.items()}
-    with m.If(accept):
+    buf = {k: Signal.like(x, name=f"wb_{k}", reset_less=True) for k, x in row.items()}
+    _, _, _, accept_b = control("_buf")
+    with m.If(accept_b):
         m.d.sync += [buf[k].eq(x) for k, x in row.items()]
     # the row engine clamps the span and picks the track (its first clock, not this one's)
     return {**buf, **held}, have
@@ -141,7 +159,9 @@ def row_engine(m, w, channels, rows, row_link, space, platform=None):
     sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
                  row_link.ready.eq(sc.aligned & space)]
-    v = {k: sc.input(k, val) for k, val in rows.items()}
+    # the inputs are captured at every slot a job may start in (``aligned``, not the start:
+    # safe, since no job reads an input more than ``ii`` clocks after its start), from copies
+    v = sc.inputs(rows, copy=sc.aligned_copy)
     size = 1 << w.screen_bits
     clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
     border = v["xl"] < 0                          # the span starts at column 0: its track
@@ -217,11 +237,12 @@ def stepper(m, w, channels, rows, rows_valid, rows_take, o):
     fragment registered (rounded and saturated) on its way out."""
     acc_bits = w.FI + 9                        # Phi and d wrap modulo 2**acc_bits: only
     cur, last = Signal(), Signal()              # emitted values must fit: |Phi| < 128
-    x, xe, y = Signal(w.screen_bits + 1), Signal(w.screen_bits + 1), Signal(w.screen_bits)
-    tri = Signal.like(rows["tri"], name="st_tri")
-    phi = [Signal(acc_bits, name=f"st_phi{ch}") for ch in range(channels)]
-    d = [Signal(acc_bits, name=f"st_d{ch}") for ch in range(channels)]
-    a2 = [Signal(acc_bits, name=f"st_a2_{ch}") for ch in range(channels)]
+    data = lambda shape, name: Signal(shape, name=name, reset_less=True)   # no reset: valid
+    x, xe = data(w.screen_bits + 1, "st_x"), data(w.screen_bits + 1, "st_xe")  # bits have it
+    y, tri = data(w.screen_bits, "st_y"), data(len(rows["tri"]), "st_tri")
+    phi = [data(acc_bits, f"st_phi{ch}") for ch in range(channels)]
+    d = [data(acc_bits, f"st_d{ch}") for ch in range(channels)]
+    a2 = [data(acc_bits, f"st_a2_{ch}") for ch in range(channels)]
     shift = w.FI - VALUE.frac_bits
     en = ~o.valid | o.ready                     # the output register is free
     take = ~cur | (en & last)
