@@ -25,7 +25,6 @@ from .dsp import mult18
 __all__ = ["Schedule", "OPERAND", "MUL_LAT"]
 
 OPERAND = 35          # signed operand bits: an 18-bit signed top slice, a 17-bit unsigned low one
-LOGIC_ROM = 256       # tables up to this deep are logic, not block RAM (``Schedule.rom``)
 CAPTURE_SHARE = 256   # enables per copy of a capture enable (``Schedule.inputs``)
 MUL_LAT = 4           # issue (operands muxed) -> operand regs -> partial products -> two adds
 
@@ -205,12 +204,8 @@ class Schedule:
         is never in series with logic)."""
         k = self._when(addr)
         self._read(k, addr)
-        # a small table is logic (a few LUTs per output bit, in series with nothing): a block
-        # RAM's clock to output, 5.8 ns on ECP5 without its output register, is most of a clock
-        small = len(lut.contents) <= LOGIC_ROM
         mem = Memory(shape=unsigned(lut.fmt.width), depth=len(lut.contents),
-                     init=[int(v) & ((1 << lut.fmt.width) - 1) for v in lut.contents],
-                     attrs={"rom_style": "logic"} if small else None)
+                     init=[int(v) & ((1 << lut.fmt.width) - 1) for v in lut.contents])
         self.m.submodules[f"{self.name}_{name}_rom"] = mem
         port = mem.read_port()
         self.m.d.comb += [port.addr.eq(addr), port.en.eq(self.en & self.at(k))]

@@ -234,7 +234,7 @@ def row_queue(m, rows, valid, started, space, depth=8):
 
 def stepper(m, w, channels, rows, rows_valid, rows_take, o):
     """One fragment per clock from the rows: Phi += d, d += 2A per pixel and channel; the
-    fragment registered (rounded and saturated) on its way out."""
+    fragment registered (rounded and saturated) on its way out. Returns its busy bit."""
     acc_bits = w.FI + 9                        # Phi and d wrap modulo 2**acc_bits: only
     cur, last = Signal(), Signal()              # emitted values must fit: |Phi| < 128
     data = lambda shape, name: Signal(shape, name=name, reset_less=True)   # no reset: valid
@@ -244,8 +244,13 @@ def stepper(m, w, channels, rows, rows_valid, rows_take, o):
     d = [data(acc_bits, f"st_d{ch}") for ch in range(channels)]
     a2 = [data(acc_bits, f"st_a2_{ch}") for ch in range(channels)]
     shift = w.FI - VALUE.frac_bits
-    en = ~o.valid | o.ready                     # the output register is free
-    take = ~cur | (en & last)
+    # A one-fragment skid buffer beside the output register: the stepper emits while the
+    # skid is empty (``room``, a register), so its few hundred enables wait on no handshake
+    # from outside; a fragment emitted while the output register is held goes to the skid,
+    # and the skid goes out before anything newer (the stepper waits while it is full).
+    skid_valid = Signal(name="st_skid_valid")
+    room = ~skid_valid
+    take = ~cur | (room & last)
     m.d.comb += rows_take.eq(take & rows_valid)
     with m.If(take & rows_valid):
         m.d.sync += [cur.eq(rows["some"]), last.eq(rows["one"]),
@@ -253,17 +258,23 @@ def stepper(m, w, channels, rows, rows_valid, rows_take, o):
         for ch in range(channels):             # Phi arrives with the rounding half in it
             m.d.sync += [phi[ch].eq(rows[f"phi{ch}"]),
                          d[ch].eq(rows[f"d{ch}"]), a2[ch].eq(rows[f"c{ch}_a2"])]
-    with m.Elif(cur & en):
+    with m.Elif(cur & room):
         with m.If(last):
             m.d.sync += cur.eq(0)
         m.d.sync += [x.eq(x + 1), last.eq(x + 2 == xe)]
         for ch in range(channels):
             m.d.sync += [phi[ch].eq(phi[ch] + d[ch]), d[ch].eq(d[ch] + a2[ch])]
-    with m.If(en):
-        m.d.sync += [o.valid.eq(cur), o.payload["tri"].eq(tri), o.payload["x"].eq(x),
-                     o.payload["y"].eq(y)]
-        for ch in range(channels):
-            val = phi[ch].as_signed() >> shift
-            m.d.sync += o.payload[f"v{ch}"].eq(Mux(val > VALUE.max, VALUE.max,
-                                                   Mux(val < VALUE.min, VALUE.min, val)))
-    return cur
+    emit = cur & room
+    frag = {"tri": tri, "x": x, "y": y}
+    for ch in range(channels):
+        val = phi[ch].as_signed() >> shift
+        frag[f"v{ch}"] = Mux(val > VALUE.max, VALUE.max, Mux(val < VALUE.min, VALUE.min, val))
+    skid = {k: Signal.like(o.payload[k], name=f"st_skid_{k}", reset_less=True) for k in frag}
+    free = ~o.valid | o.ready                   # the output register is free
+    with m.If(free):
+        m.d.sync += [o.valid.eq(skid_valid | emit), skid_valid.eq(0)]
+        m.d.sync += [o.payload[k].eq(Mux(skid_valid, skid[k], v)) for k, v in frag.items()]
+    with m.Elif(emit):
+        m.d.sync += [skid_valid.eq(1)] + [skid[k].eq(v) for k, v in frag.items()]
+    return cur | skid_valid
+
