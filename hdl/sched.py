@@ -273,7 +273,13 @@ class Schedule:
     def _align(self):
         """``aligned``, a register: the next clock's slot count is 0, or no job will be in
         flight then, so that nothing lies between it and the start it allows."""
-        idle = ~_or_tree([self.start] + [self.at(k) for k in range(1, self.length - 1)])
+        # no job in flight next clock: none starts now, none is at 1 .. length - 2 (from a
+        # register: the OR of the phase bits an offset earlier, as in ``busy``), so that each
+        # copy of ``aligned`` is two LUTs from registers
+        inflight = Signal(name=f"{self.name}_inflight")
+        with self.m.If(self.en):
+            self.m.d.sync += inflight.eq(_or_tree([self.at(k) for k in range(self.length - 2)]))
+        idle = ~self.start & ~inflight
         for n, aligned in enumerate(self._aligned):
             count = Signal(range(self.ii), name=f"{self.name}_slot{n}")
             nxt = Mux(self.start, 1 % self.ii, Mux(count == self.ii - 1, 0, count + 1))

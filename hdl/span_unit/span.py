@@ -20,8 +20,8 @@ Four parts, each a stream stage with backpressure:
 - ``stepper``: one fragment per clock, two additions per quadratic channel per pixel:
   Phi += d, d += 2A (one for a linear channel, whose 2A is 0).
 """
-from amaranth.hdl import Cat, Const, Mux, Signal, signed
-from amaranth.lib.fifo import SyncFIFO
+from amaranth.hdl import Cat, Const, Mux, Signal, signed, unsigned
+from amaranth.lib.memory import Memory
 
 from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule
 from ..setup_unit.formats import VALUE
@@ -214,22 +214,30 @@ def row_queue(m, rows, valid, started, space, depth=8):
     engine and the stepper, with credits: ``space`` (registered) is high while fewer than
     ``depth`` rows are started and not yet taken, so a started row always finds a place and
     the row engine needs no enable. No combinational path runs from the fragment stream's
-    ready back into the row engine and the walker. Returns ``(rows, valid, take)``."""
+    ready back into the row engine and the walker. Its valid is a register (``level`` next
+    != 0), so the stepper's load enable is one LUT from registers. Returns
+    ``(rows, valid, take)``; the caller drives ``take`` (only while valid)."""
     names = list(rows)
     width = sum(len(rows[k]) for k in names)
-    fifo = SyncFIFO(width=width, depth=depth)
-    m.submodules.row_queue = fifo
-    m.d.comb += [fifo.w_data.eq(Cat(*(rows[k] for k in names))), fifo.w_en.eq(valid)]
+    mem = Memory(shape=unsigned(width), depth=16, init=[])      # 4-bit pointers wrap
+    m.submodules.row_queue = mem
+    wr, rd = mem.write_port(), mem.read_port(domain="comb")
+    wptr, rptr = Signal(4, name="rq_wptr"), Signal(4, name="rq_rptr")
+    take, nonempty = Signal(name="rq_take"), Signal(name="rq_valid")
+    level = Signal(range(depth + 1), name="rq_level")    # rows written, not yet taken
     held = Signal(range(depth + 1), name="rq_held")      # rows started, not yet taken
-    nxt = held + started - fifo.r_en
-    m.d.sync += [held.eq(nxt), space.eq(nxt < depth)]
+    m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*(rows[k] for k in names))),
+                 wr.en.eq(valid), rd.addr.eq(rptr)]
+    nxt, lvl = held + started - take, level + valid - take
+    m.d.sync += [held.eq(nxt), space.eq(nxt < depth), level.eq(lvl), nonempty.eq(lvl.any()),
+                 wptr.eq(wptr + valid), rptr.eq(rptr + take)]
     out, at = {}, 0
     for k in names:
         n = len(rows[k])
-        out[k] = fifo.r_data[at:at + n]
+        out[k] = rd.data[at:at + n]
         out[k] = out[k].as_signed() if rows[k].shape().signed else out[k]
         at += n
-    return out, fifo.r_rdy, fifo.r_en
+    return out, nonempty, take
 
 
 def stepper(m, w, channels, rows, rows_valid, rows_take, o):
