@@ -228,8 +228,12 @@ def row_queue(m, rows, valid, started, space, depth=8):
     held = Signal(range(depth + 1), name="rq_held")      # rows started, not yet taken
     m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*(rows[k] for k in names))),
                  wr.en.eq(valid), rd.addr.eq(rptr)]
-    nxt, lvl = held + started - take, level + valid - take
-    m.d.sync += [held.eq(nxt), space.eq(nxt < depth), level.eq(lvl), nonempty.eq(lvl.any()),
+    # the flags from compares of the registers and the handshakes, not from the sums: a row
+    # is left unless the one row goes; fewer than depth held unless a full queue grows
+    m.d.sync += [held.eq(held + started - take), level.eq(level + valid - take),
+                 nonempty.eq(valid | (level > 1) | (nonempty & ~take)),
+                 space.eq((held < depth - 1) | ((held == depth - 1) & ~(started & ~take))
+                          | ((held == depth) & take & ~started)),
                  wptr.eq(wptr + valid), rptr.eq(rptr + take)]
     out, at = {}, 0
     for k in names:
