@@ -310,7 +310,12 @@ def _groups(channels, groups="0"):
     return max(parse_groups(groups, channels)) + 1
 
 
-def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, groups="0", **_):
+def _flat_words(rng, n, flat):
+    """Random flat words (u32): the raster must carry each to its triangle's fragments."""
+    return {f"f{k}": rng.integers(0, 1 << 32, n, dtype=np.int64) for k in range(flat)}
+
+
+def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, groups="0", flat=0, **_):
     """math-notes §5's setup and span cases, as triangles (raw sub-pixel coordinates)."""
     S, W = 1 << sub_bits, 1 << screen_bits
     c = S // 2                                   # a pixel centre's offset
@@ -346,11 +351,12 @@ def raster_hard_cases(screen_bits=10, sub_bits=4, channels=2, groups="0", **_):
     for ch in range(channels):
         for k in range(3):
             out[f"v{ch}_{k}"] = np.roll(vals, 3 * ch + k)[:n]
+    out.update(_flat_words(np.random.default_rng(n), n, flat))
     return out, list(tris)
 
 
 def random_triangles(rng, n, screen_bits=10, sub_bits=4, channels=2, size=None, groups="0",
-                     **_):
+                     flat=0, **_):
     """Random triangles mostly on screen (some off it), values in [-1, 1], e in [-1, 0]."""
     S, W = 1 << sub_bits, 1 << screen_bits
     size = W if size is None else size
@@ -364,6 +370,7 @@ def random_triangles(rng, n, screen_bits=10, sub_bits=4, channels=2, size=None, 
     for ch in range(channels):
         for k in range(3):
             out[f"v{ch}_{k}"] = rng.integers(-16384, 16385, n)
+    out.update(_flat_words(rng, n, flat))
     return out
 
 
@@ -383,11 +390,12 @@ def _raster_vectors(rng, n, **params):
 
 
 def _raster_check(inp, out, **params):
-    """Coverage must match exactly (else every fragment counts as wrong); values within one
-    LSB of the float model of the same method (docs/quadratic.md derives the widths)."""
+    """Coverage and the flat words must match exactly (else every fragment counts as wrong);
+    values within one LSB of the float model of the same method (docs/quadratic.md derives
+    the widths)."""
     want = _raster_run(inp, **params)
     same = len(out["tri"]) == len(want["tri"]) and all(
-        np.array_equal(np.asarray(out[k]), want[k]) for k in ("tri", "x", "y"))
+        np.array_equal(np.asarray(out[k]), want[k]) for k in want if not k.startswith("v"))
     n = max(len(out["tri"]), 1)
     if not same:
         return {"coverage": (np.full(n, np.inf), np.zeros(n))}

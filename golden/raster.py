@@ -118,15 +118,17 @@ def sorted_triangles(inputs, channels, sub_bits, groups=1):
                 x2=rel[0][1], y2=rel[1][1], values=vals, e=es[0], groups=es)
 
 
-def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", groups="0", **_):
+def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", groups="0", flat=0,
+        **_):
     """Fragments of every triangle: ``tri x y`` and ``v{k}`` (reals, saturated to the value
     range), in the order the RTL emits them (by triangle, row, column); each channel with its
-    group's edge constants."""
+    group's edge constants; the ``flat`` words ``f{k}`` of each fragment's triangle."""
     modes = parse_modes(modes, channels)
     groups = parse_groups(groups, channels)
     x, y = _vertices(inputs)
     tri, px, py = coverage(x, y, sub_bits, screen_bits)
-    out = {"tri": tri, "x": px, "y": py}
+    out = {"tri": tri, "x": px, "y": py,
+           **{f"f{k}": np.asarray(inputs[f"f{k}"])[tri] for k in range(flat)}}
     st = sorted_triangles(inputs, channels, sub_bits, max(groups) + 1)
     X = px + 0.5 - st["x0"][tri]
     Y = py + 0.5 - st["y0"][tri]

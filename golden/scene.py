@@ -332,6 +332,10 @@ def prepare(scene):
             inputs[f"v{ch}_{c}"] = _raw(val, VALUE)
     if bump:
         inputs.update(bump["constants"])
+        for n, (t, k) in enumerate(bump["lanes"] if scene["bump"]["method"] == "fenney_polar"
+                                   else ()):   # k1 k2 k3 Q, a flat word from the top down
+            inputs[f"f{n}"] = sum(inputs.pop(f"{t}{k}_{c}") << 8 * (3 - j)
+                                  for j, c in enumerate(("k1", "k2", "k3", "q")))
     # uniforms: L and H (phong), and the colour coefficients
     uni = {}
     for j, (L, Hv) in enumerate(zip(Ls, Hs)):
@@ -624,7 +628,7 @@ def polar_model(prep, tri, s, t, offset=None):
     texel = {c: bumps.fetch(b[c], raw_s, raw_t) for c in ("S", "R")}
     out = {}
     for lane, k in b["lanes"]:
-        c = {n: prep["inputs"][f"{lane}{k}_{n}"][tri] for n in ("k1", "k2", "k3", "q")}
+        c = {n: b["constants"][f"{lane}{k}_{n}"][tri] for n in ("k1", "k2", "k3", "q")}
         key = f"{'d' if lane == 'l' else 's'}{k}"
         i = np.clip(np.rint(fenney.polar_float({"s": texel["S"], "r": texel["R"],
                                                 **c})) + offset.get(key, 0), 0, 255)

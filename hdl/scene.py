@@ -22,9 +22,9 @@
                  with its diffuse and specular tables) -> colour
 
     bump = "fenney_polar" (seed 004, first embodiment):
-    triangles -> raster (depth, and the texture coordinates s, t, linear)
-       `-> per-triangle constants (k1, k2, k3, Q of L and of H, per light) in a queue beside
-           the raster, met again by the fragments of their triangle (``_triangle_queue``)
+    triangles -> raster (depth, and the texture coordinates s, t, linear; the per-triangle
+                 constants k1, k2, k3, Q of L and of H per light as flat words, carried to
+                 every fragment of their triangle)
               -> texture ROM (S/R texels, nearest, wrapping) -> fenney_polar (FIG. 3, one lane
                  per light and vector, the texel's sin S and cos S shared)
               -> power (of the H lanes) -> colour -> fragments
@@ -36,7 +36,6 @@ streams triangles. The depth test and the framebuffer are not here: they model e
 and the renderer (``sim/render.py``) keeps them.
 """
 from amaranth.hdl import Cat, Const, Module, Mux, Signal
-from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import Out
 
 from .fixed import Field, binary_angle, u
@@ -54,15 +53,12 @@ from .span_unit.raster import Raster
 from .texture_unit import FILTERS, MAX_TEXTURE, fetch
 from .unit import Pipeline, Unit
 
-__all__ = ["ScenePipeline", "METHODS", "BUMPS", "TRI_QUEUE"]
+__all__ = ["ScenePipeline", "METHODS", "BUMPS"]
 
 METHODS = MODES + ("phong",)
 BUMPS = ("none", "fenney_xz", "fenney_polar", "angular")
 ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotation's default)
 MAX_CHANNELS = Raster.RANGES["channels"][1]
-K8 = u(8)                     # k1, k2, k3 (k * 255) and Q (turns * 256): the patent's 8 bits
-TRI_QUEUE = 16                # triangles whose constants wait beside the raster (see below)
-TRI_TAG = 5                   # low bits of the triangle index kept with them: 2**5 > 16
 
 
 class ScenePipeline(Unit):
@@ -131,8 +127,9 @@ class ScenePipeline(Unit):
         if q["bump"] == "none":
             out = [("raster", raster, f"shading.method = {q['method']}")]
         elif q["bump"] == "fenney_polar":
+            raster["flat"] = len(self.lanes)
             out = [("raster", raster, "bump.method = fenney_polar: depth and texture "
-                    "coordinates, linear")]
+                    "coordinates, linear; each lane's k1, k2, k3 and Q as a flat word")]
         elif q["bump"] == "angular":
             out = [("raster", raster, "bump.method = angular: depth, texture coordinates, "
                     "the normal's angles and the frame's twist, linear")]
@@ -197,12 +194,6 @@ class ScenePipeline(Unit):
         return [(t, k) for k in range(q["lights"]) for t in ("l", "h")
                 if q["specular"] or t == "l"]
 
-    @property
-    def triangle_constants(self):
-        """Per-triangle constants that bypass the raster: k1, k2, k3 and Q of each lane."""
-        return [Field(f"{t}{k}_{c}", K8) for t, k in self.lanes
-                for c in ("k1", "k2", "k3", "q")] if self.params["bump"] == "fenney_polar" \
-            else []
 
     def part_latency(self, name, params):
         """A part's stages in this pipeline: a unit's latency, or (the texture ROM, and
@@ -222,7 +213,7 @@ class ScenePipeline(Unit):
 
     @property
     def inputs(self):
-        return list(self.raster.inputs) + self.triangle_constants
+        return list(self.raster.inputs)
 
     @property
     def uniforms(self):
@@ -256,13 +247,14 @@ class ScenePipeline(Unit):
         m.submodules.raster = raster = Raster(**self.parts()[0][1])
         m.d.comb += [raster.i.payload[f.name].eq(self.i.payload[f.name])
                      for f in raster.inputs]
-        if self.triangle_constants:
-            frags, const = _triangle_queue(m, self.i, raster, self.triangle_constants)
-        else:
-            m.d.comb += [raster.i.valid.eq(self.i.valid), self.i.ready.eq(raster.i.ready)]
-            frags, const = raster.o, {}
-        p = Pipeline(m, frags, self.o)
+        m.d.comb += [raster.i.valid.eq(self.i.valid), self.i.ready.eq(raster.i.ready)]
+        p = Pipeline(m, raster.o, self.o)
         frag = raster.o.payload
+        const = {}
+        for n, (t, k) in enumerate(self.lanes if q["bump"] == "fenney_polar" else ()):
+            word = frag[f"f{n}"]          # a lane's constants, packed k1 k2 k3 Q from the top
+            const.update({f"{t}{k}_{c}": word[8 * (3 - j):8 * (4 - j)]
+                          for j, c in enumerate(("k1", "k2", "k3", "q"))})
         # the pixel's coordinates ride along as _pix_x, _pix_y (x, y, z are the bump units')
         v = {"tri": frag.tri, "_pix_x": frag.x, "_pix_y": frag.y, **const}
         v.update({name: frag[f"v{k}"] for k, (name, _) in enumerate(self.channels)})
@@ -349,40 +341,3 @@ def units_in(design):
     frag = Fragment.get(design, None)
     return sorted(name for _, name, *_ in frag.subfragments)
 
-
-class _Stream:
-    """A stream's handshake (the fragments that met their triangle's constants)."""
-
-    def __init__(self):
-        self.valid, self.ready = Signal(), Signal()
-
-
-def _triangle_queue(m, i, raster, fields):
-    """Constants fixed for a triangle, beside the raster rather than through it (the patent's
-    per-polygon K1, K2, K3 and Q): a triangle goes in only when both the raster and a
-    ``TRI_QUEUE``-deep queue take it; its constants enter the queue with the low ``TRI_TAG``
-    bits of its index. A fragment goes on when the head's tag is its triangle's; a head
-    whose tag differs belongs to a triangle that is done (or culled, or covered no pixel):
-    it is dropped, one a clock, while the fragment waits. Fragments come in triangle order
-    and the queue holds every triangle between the head and the raster's newest, fewer than
-    2**TRI_TAG, so equal tags mean the same triangle. Returns the fragments' handshake and
-    the constants (the head's, registered in the queue)."""
-    width = TRI_TAG + sum(f.fmt.width for f in fields)
-    m.submodules.tri_queue = fifo = SyncFIFOBuffered(width=width, depth=TRI_QUEUE)
-    tag = Signal(TRI_TAG)
-    take = i.valid & raster.i.ready & fifo.w_rdy
-    m.d.comb += [raster.i.valid.eq(i.valid & fifo.w_rdy), i.ready.eq(raster.i.ready & fifo.w_rdy),
-                 fifo.w_en.eq(take),
-                 fifo.w_data.eq(Cat(tag, *(i.payload[f.name] for f in fields)))]
-    with m.If(take):
-        m.d.sync += tag.eq(tag + 1)
-    frags = _Stream()
-    meets = fifo.r_rdy & (fifo.r_data[:TRI_TAG] == raster.o.payload.tri[:TRI_TAG])
-    m.d.comb += [frags.valid.eq(raster.o.valid & meets),
-                 raster.o.ready.eq(frags.ready & meets),
-                 fifo.r_en.eq(raster.o.valid & fifo.r_rdy & ~meets)]
-    const, at = {}, TRI_TAG
-    for f in fields:
-        const[f.name] = fifo.r_data[at:at + f.fmt.width]
-        at += f.fmt.width
-    return frags, const

@@ -24,6 +24,9 @@ def check(inputs, out, params):
         assert not len(bad), (f"fragment {bad[0]}: RTL (tri, x, y) = "
                               f"{(out['tri'][bad[0]], out['x'][bad[0]], out['y'][bad[0]])}, "
                               f"model {(want['tri'][bad[0]], want['x'][bad[0]], want['y'][bad[0]])}")
+    for k in (k for k in want if k.startswith("f")):      # flat words: exactly their triangle's
+        bad = np.flatnonzero(out[k] != want[k])
+        assert not len(bad), f"fragment {bad[0]}: {k} = {out[k][bad[0]]}, not {want[k][bad[0]]}"
     worst = 0.0
     for k in want:
         if k.startswith("v"):
@@ -105,6 +108,31 @@ def test_edge_constant_groups(simulator, name):
     extra = random_triangles(np.random.default_rng(7), 40, **p)
     inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
     out, _ = stream("raster", inputs, simulator, params)
+    check(inputs, out, p)
+
+
+@pytest.mark.parametrize("simulator,name", list(per_simulator(["raster"], only=("verilator",))))
+def test_flat_words_across_empty_triangles(simulator, name):
+    """Flat words (a triangle's constants, fenney_polar's k1 k2 k3 Q) reach every fragment of
+    their triangle exactly, across runs of triangles that cover no pixel (sub-pixel, culled,
+    off screen: 0, 1, 40 and 300 in a row) with stalls on both sides: the sequence that hung
+    the queue that once met the constants beside the raster (16 deep)."""
+    params = {**SMALL, "channels": 1, "flat": 2}
+    p = make_unit("raster", spec=True, **params).params
+    rng = np.random.default_rng(11)
+    parts = []
+    for run in (0, 1, 40, 300, 2):
+        parts.append(random_triangles(rng, 3, **p, size=20))            # some pixels
+        empty = random_triangles(rng, run, **p, size=1)                # at most a pixel
+        c = rng.integers(0, 64 * 16, (run, 1)) // 16 * 16 + 1          # inside one pixel,
+        for a in ("x", "y"):                                           # off its centre
+            for k in range(3):
+                empty[f"{a}{k}"] = (c[:, 0] + rng.integers(0, 6, run)).astype(np.int64)
+        parts.append(empty)
+    inputs = {k: np.concatenate([q[k] for q in parts]) for k in parts[0]}
+    out, _ = stream(name, inputs, simulator, params, p_valid=0.8, p_ready=0.5, seed=4)
+    want = MODELS["raster"].run(inputs, **p)
+    assert len(set(want["tri"])) < len(inputs["x0"]) - 300        # the empty runs are empty
     check(inputs, out, p)
 
 

@@ -9,12 +9,15 @@
   vector's own, (L'i.L'j - 1)/2, for its components, seed 000 section 2): ``e01 e02 e12`` for
   group 0, ``e01_g e02_g e12_g`` for group g.
 - Fragment coordinates: unsigned pixel indices below the screen size.
+- Flat words: ``FLAT``, u32, a triangle's constants packed by whoever sends them (the scene's
+  fenney_polar: k1, k2, k3 and Q of one lane, 8 bits each, Q at the bottom).
 """
 from ..fixed import Field, s, u
 
 VALUE = s(16, 14)
 EDGE = s(16, 15)
 TRI = u(32)                       # the input row a fragment came from
+FLAT = u(32)                      # a flat word: a triangle's constants, packed
 
 
 def coord(screen_bits, sub_bits):
@@ -37,6 +40,11 @@ def fragment_fields(screen_bits, channels):
     return ([Field("tri", TRI), Field("x", u(screen_bits, 0, "px")),
              Field("y", u(screen_bits, 0, "px"))]
             + [Field(f"v{ch}", VALUE) for ch in range(channels)])
+
+
+def flat_fields(words):
+    """A triangle's constants that the raster carries to its fragments unchanged: ``f{k}``."""
+    return [Field(f"f{k}", FLAT) for k in range(words)]
 
 
 MODES = ("xshading", "exact", "linear")

@@ -1,7 +1,11 @@
 """``raster``: the setup unit and the span engine on one clock (seeds 000-002).
 
-In: triangles (``x0 y0 x1 y1 x2 y2``, ``e01 e02 e12``, ``v{k}_0..2`` per channel); out: one
-fragment per clock, ``tri x y v{k}``, ``tri`` being the input row's index. The setup is a
+In: triangles (``x0 y0 x1 y1 x2 y2``, ``e01 e02 e12``, ``v{k}_0..2`` per channel, and ``flat``
+words ``f{k}``); out: one fragment per clock, ``tri x y v{k} f{k}``, ``tri`` being the input
+row's index. A flat word is a triangle's constant (fenney_polar's k1, k2, k3 and Q) that
+travels with its triangle through the setup, the walker, the row engine and the row queue to
+each of its fragments, unchanged: a triangle that covers no pixel takes its words with it, so
+nothing beside the raster has to meet fragments with their triangles again. The setup is a
 schedule on one shared multiplier (``Setup.program``, ``setup_clocks`` per triangle); it works
 on the next triangle while the walker and the row engine (``channels + 1`` multipliers, a row
 every ``row_ii`` clocks) and the stepper (one fragment per clock) work on the current one.
@@ -14,8 +18,8 @@ from amaranth.hdl import Const, Fragment, Module, Signal
 from amaranth.lib.wiring import Out
 
 from ..sched import Schedule
-from ..setup_unit.formats import (MODES, fragment_fields, parse_groups, parse_modes,
-                                   triangle_fields)
+from ..setup_unit.formats import (MODES, flat_fields, fragment_fields, parse_groups,
+                                   parse_modes, triangle_fields)
 from ..setup_unit.setup import Setup
 from ..unit import Unit
 from .span import Link, row_engine, row_queue, stepper, walker
@@ -28,14 +32,16 @@ class Raster(Unit):
     DOC = ("Triangle setup (X-shading / exact mid-edge / linear, one reciprocal) and the "
            "forward-difference span engine; many fragments per triangle")
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
-              "recip": "newton", "recip_iters": 2, "groups": "0"}
+              "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3),
-              "groups": None}     # a string: parse_groups checks it
+              "groups": None,     # a string: parse_groups checks it
+              "flat": (0, 8)}
     PER_CHANNEL = ("modes", "groups")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
-    def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups):
+    def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups,
+                 flat):
         parse_modes(modes, channels)
         self.groups = max(parse_groups(groups, channels)) + 1
 
@@ -48,11 +54,17 @@ class Raster(Unit):
     @property
     def inputs(self):
         q = self.params
-        return triangle_fields(q["screen_bits"], q["sub_bits"], q["channels"], self.groups)
+        return (triangle_fields(q["screen_bits"], q["sub_bits"], q["channels"], self.groups)
+                + self.flat_fields)
 
     @property
     def outputs(self):
-        return fragment_fields(self.params["screen_bits"], self.params["channels"])
+        return fragment_fields(self.params["screen_bits"], self.params["channels"]) \
+            + self.flat_fields
+
+    @property
+    def flat_fields(self):
+        return flat_fields(self.params["flat"])
 
     @property
     def timing(self):
@@ -89,6 +101,8 @@ class Raster(Unit):
         v = sc.inputs({**{f.name: self.i.payload[f.name] for f in self.inputs}, "tri": count},
                       copy=idle_copy)
         coef = setup.program(sc, v)
+        flat = [f.name for f in self.flat_fields]
+        coef.update({k: v[k] for k in flat})          # held as tri is, in the input registers
         sc.finish()
         last = sc.at(sc.length - 1)
         done, src_ready = Signal(), Signal()
@@ -101,10 +115,10 @@ class Raster(Unit):
             m.d.sync += [running[k].eq(run_n), r.eq(~run_n & ~done_n)]
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
-        rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled)
-        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform)
+        rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat)
+        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform, flat)
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
-        cur = stepper(m, w, ch, rows, queued, take, self.o)
+        cur = stepper(m, w, ch, rows, queued, take, self.o, flat)
         busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | running[0]
                 | done | re.busy())
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]

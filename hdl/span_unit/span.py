@@ -44,7 +44,7 @@ def _step(i, r, q, d, n):
     return i + q + carry, Mux(carry, r + n, r - d)
 
 
-def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
+def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, flat=()):
     """Rows from triangles. ``src``: the setup's values; returns the row values (the edges'
     columns ``xl``, ``xr`` of row ``j``, unclamped, the numerator tracks of the left edge's
     first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left).
@@ -52,7 +52,7 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     j = Signal(w.wrow)
     to_j1, to_jm = (Signal(signed(w.wrow + 1), name=f"w_{k}") for k in ("to_j1", "to_jm"))
     left_long = Signal()
-    keep = ["tri", "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels)
+    keep = ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels)
                                   for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")]
     held = {k: Signal.like(src[k], name=f"w_{k}") for k in keep}
     edge = {}
@@ -146,7 +146,7 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled):
     return {**buf, **held}, have
 
 
-def row_engine(m, w, channels, rows, row_link, space, platform=None):
+def row_engine(m, w, channels, rows, row_link, space, platform=None, flat=()):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
@@ -198,7 +198,7 @@ def row_engine(m, w, channels, rows, row_link, space, platform=None):
     half = 1 << (w.FI - VALUE.frac_bits - 1)
     fns = {k: (lambda r: r, x) for k, x in out.items()}
     fns.update({f"phi{ch}": (lambda r: r + half, out[f"phi{ch}"]) for ch in range(channels)})
-    fns.update({k: (lambda r: r, v[k]) for k in ("j", "xs", "xe", "tri")})
+    fns.update({k: (lambda r: r, v[k]) for k in ("j", "xs", "xe", "tri", *flat)})
     fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
     fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
     out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
@@ -244,7 +244,7 @@ def row_queue(m, rows, valid, started, space, depth=8):
     return out, nonempty, take
 
 
-def stepper(m, w, channels, rows, rows_valid, rows_take, o):
+def stepper(m, w, channels, rows, rows_valid, rows_take, o, flat=()):
     """One fragment per clock from the rows: Phi += d, d += 2A per pixel and channel; the
     fragment registered (rounded and saturated) on its way out. Returns its busy bit."""
     acc_bits = w.FI + 9                        # Phi and d wrap modulo 2**acc_bits: only
@@ -252,6 +252,7 @@ def stepper(m, w, channels, rows, rows_valid, rows_take, o):
     data = lambda shape, name: Signal(shape, name=name, reset_less=True)   # no reset: valid
     x, xe = data(w.screen_bits + 1, "st_x"), data(w.screen_bits + 1, "st_xe")  # bits have it
     y, tri = data(w.screen_bits, "st_y"), data(len(rows["tri"]), "st_tri")
+    const = {k: data(len(rows[k]), f"st_{k}") for k in flat}   # the triangle's flat words
     phi = [data(acc_bits, f"st_phi{ch}") for ch in range(channels)]
     d = [data(acc_bits, f"st_d{ch}") for ch in range(channels)]
     a2 = [data(acc_bits, f"st_a2_{ch}") for ch in range(channels)]
@@ -267,6 +268,7 @@ def stepper(m, w, channels, rows, rows_valid, rows_take, o):
     with m.If(take & rows_valid):
         m.d.sync += [cur.eq(rows["some"]), last.eq(rows["one"]),
                      x.eq(rows["xs"]), xe.eq(rows["xe"]), y.eq(rows["j"]), tri.eq(rows["tri"])]
+        m.d.sync += [r.eq(rows[k]) for k, r in const.items()]
         for ch in range(channels):             # Phi arrives with the rounding half in it
             m.d.sync += [phi[ch].eq(rows[f"phi{ch}"]),
                          d[ch].eq(rows[f"d{ch}"]), a2[ch].eq(rows[f"c{ch}_a2"])]
@@ -277,7 +279,7 @@ def stepper(m, w, channels, rows, rows_valid, rows_take, o):
         for ch in range(channels):
             m.d.sync += [phi[ch].eq(phi[ch] + d[ch]), d[ch].eq(d[ch] + a2[ch])]
     emit = cur & room
-    frag = {"tri": tri, "x": x, "y": y}
+    frag = {"tri": tri, "x": x, "y": y, **const}
     for ch in range(channels):
         val = phi[ch].as_signed() >> shift
         frag[f"v{ch}"] = Mux(val > VALUE.max, VALUE.max, Mux(val < VALUE.min, VALUE.min, val))
