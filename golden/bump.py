@@ -157,9 +157,20 @@ def texcoords(scene):
     return (np.stack([i / m, j / n], -1).reshape(-1, 2) * rep)
 
 
+def rotation(degrees):
+    """A mesh's rotation matrix (scenes.md ``mesh.rotate``): about x, then y, then z."""
+    rot = np.eye(3)
+    for axis, deg in enumerate(degrees):
+        c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+        a, b = [k for k in range(3) if k != axis]
+        r = np.eye(3)
+        r[a, a], r[a, b], r[b, a], r[b, b] = c, -s, s, c
+        rot = r @ rot
+    return rot
+
+
 def frames(scene):
     """(T, B, N) per vertex of a scene's mesh, in world space (its rotation applied)."""
-    from .scene import rotation
     msh = scene["mesh"]
     rot = rotation(msh["rotate"])
     return tuple(f @ rot.T for f in grid_frames(msh["shape"], *msh["segments"]))

@@ -13,13 +13,12 @@ UNITS = {cls.NAME: cls for cls in (TexelDecode, FenneyPower, FenneyDot, FenneyXZ
 
 
 # Composed designs: built by make_unit and every simulator like a unit, not listed as units.
+# They register here from the package above (``scene.pipeline``: a scene's stages), which
+# ``sim`` imports, so hdl imports nothing of the layers above it.
 PIPELINES = {}
 
 
 def _pipelines():
-    if not PIPELINES:
-        from .scene import ScenePipeline
-        PIPELINES[ScenePipeline.NAME] = ScenePipeline
     return PIPELINES
 
 

@@ -23,7 +23,7 @@ import numpy as np
 from golden import MODELS
 from hdl.units import UNITS, make_unit
 
-from .__main__ import simulate
+from .simulators import simulate
 from .cli_common import unit_names, user_errors
 from .simulators import SIMS, available
 from .verilog import BUILD, SCENES
@@ -102,7 +102,7 @@ def scene_rows(sims, triangles):
     """The default scene's pipeline rendering the default scene: every triangle on the batch
     path (the scene repeated up to ``triangles``), the first few on the others (fragments per
     second either way)."""
-    from golden.scene import load, prepare
+    from scene.driver import load, prepare
     prep = prepare(load(SCENE))
     full = make_unit("scene", spec=True, **prep["params"]).params     # the key of its model
     rows = []

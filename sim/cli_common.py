@@ -11,7 +11,7 @@ import numpy as np
 
 from hdl.fixed import FieldError, check_arrays
 from hdl.units import ParamError
-from golden.scene import SceneError
+from scene.driver import SceneError
 
 NPZ_MAGIC = (b"PK\x03\x04", b"PK\x05\x06")     # a zip (np.savez), or an empty zip
 NPY_MAGIC = b"\x93NUMPY"

@@ -118,7 +118,7 @@ def designs(names):
     """``[(label, unit name, params)]``: the units, then the default scene's pipeline."""
     out = [(n, n, {}) for n in names if n in UNITS]
     if "scene" in names:
-        from golden.scene import load, prepare
+        from scene.driver import load, prepare
         out.append(("scene_default", "scene", prepare(load(SCENE))["params"]))
     return out
 

@@ -3,7 +3,7 @@ model of the same method and the float64 reference (``design/scenes.md``, "What 
 writes").
 
 The RTL streams fragments (x, y, depth, r, g, b); the depth test and the framebuffer are here,
-as a model of external memory (``hdl/scene.py`` says why).
+as a model of external memory (``scene/pipeline.py`` says why).
 """
 import json
 import sys
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from golden import scene as S
+from scene import driver as S
 
 from hdl.units import make_unit
 
@@ -72,7 +72,7 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     """Render a scene; writes the five files of scenes.md and returns the metrics.
     ``hardware``: pipeline parameters that are not scene keys (``make tradeoffs``'s knobs:
     the reciprocal, the power table's bits, fenney_dot's renormalisation)."""
-    from .__main__ import simulate
+    from .simulators import simulate
     scene = S.load(scene_path)
     if size:
         scene["image"]["width"], scene["image"]["height"] = size
@@ -111,16 +111,9 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     n = len(frags["x"])
     drawn = prep["triangles"]["drawn"]
     units = []
-    for name, p, why in pipe.parts():
-        unit = {"name": name, "why": why, "params": p, "latency": pipe.part_latency(name, p),
-                "items_in": drawn if name == "raster" else n, "items_out": n}
-        if name == "bump_polar":            # its units: the rotations of L and H, illum
-            bp = make_unit(name, spec=True, **p)
-            unit["parts"] = [{"name": part, "why": what, "latency": u.latency} for part, u, what
-                             in (("rotation", bp.rotation, "L into N's frame"),
-                                 ("rotation", bp.rotation, "H into N's frame"),
-                                 ("illum", bp.illum, "law of cosines, diffuse and specular "
-                                                     "tables"))]
+    for stage in pipe.stages:
+        unit = {**stage.describe(), "items_in": drawn if stage.name == "raster" else n,
+                "items_out": n}
         units.append(unit)
     metrics = {"scene": scene["name"], "method": params["method"],
                "bump": scene["bump"]["method"], "simulator": simulator,

@@ -62,7 +62,7 @@ def _row(knob, setting, design, *, scene=None, hardware=None, size=None, unit=No
 
 def _scene_params(scene, hardware=None, size=None):
     """A scene's pipeline parameters, as ``sim.render`` builds it."""
-    from golden import scene as S
+    from scene import driver as S
     sc = S.load(SCENES / f"{scene}.toml")
     if size:
         sc["image"]["width"] = sc["image"]["height"] = size
@@ -277,13 +277,13 @@ def _build(name, params, simulator):
 
 def _unit_error(unit, simulator):
     from golden import MODELS, TYPICAL_SIZE, random_triangles
-    from .__main__ import simulate
+    from .simulators import simulate
     name, params, n = unit["name"], unit["params"], unit["rows"]
     rng = np.random.default_rng(11)
     if name == "raster":
         inputs = random_triangles(rng, n, **params, size=TYPICAL_SIZE)
     elif name == "fenney_power":         # every X at the default material's concentration
-        from golden.scene import fenney_concentration
+        from scene.driver import fenney_concentration
         inputs = {"x": np.arange(1024), "c": np.full(1024, fenney_concentration(SHININESS))}
     else:
         inputs = MODELS[name].vectors(rng, n, **params)

@@ -21,7 +21,7 @@ settings.load_profile("shading")
 
 from golden import MODELS
 from hdl.units import make_unit
-from sim.__main__ import simulate
+from sim.simulators import simulate
 from sim.simulators import SIMS, available
 
 

@@ -7,7 +7,7 @@ from PIL import Image
 from golden.bump import (MAPS, BumpError, frames_from_uv, grid_frames, height_map,
                          polar_texels, sr_texels, tangent_normals, xz_texels)
 from golden.fenney import texel_decode
-from golden.scene import _grid_triangles
+from scene.driver import _grid_triangles
 
 
 def _angle(a, b):
@@ -136,7 +136,7 @@ def test_scene_frames_follow_the_mesh(shape):
     """A scene's frames carry the mesh's rotation: their N is the mesh's own normal, and there
     is one frame and one (s, t) per vertex, the torus's running to ``repeat`` tiles."""
     from golden.bump import frames, texcoords
-    from golden.scene import mesh, parse
+    from scene.driver import mesh, parse
     sc = parse({"mesh": {"shape": shape, "segments": [8, 6], "rotate": [30.0, -20.0, 75.0]}})
     pos, nrm, _ = mesh(sc)
     T, B, N = frames(sc)

@@ -31,8 +31,9 @@ import itertools
 import numpy as np
 import pytest
 
-from golden import bump as bumps, fenney, scene as S
-from hdl.scene import ScenePipeline, units_in
+from golden import bump as bumps, fenney
+from scene import driver as S
+from scene.pipeline import ScenePipeline, units_in
 from sim.simulators import available
 
 SCENES = "scenes"
@@ -54,7 +55,7 @@ def _prep(**tables):
 
 
 def _rtl(prep, **traffic):
-    from sim.__main__ import simulate
+    from sim.simulators import simulate
     return simulate("scene", prep["params"], prep["inputs"], "verilator",
                     uniforms=prep["uniforms"], **traffic)[0]
 
@@ -68,8 +69,7 @@ def _candidates(prep, frag, ch):
         for dt in (-1, 0, 1):
             for offs in np.ndindex(*(3,) * len(lanes)):
                 off = {key: o - 1 for key, o in zip(lanes, offs)}
-                c = {**ch, **S.polar_model(prep, frag["tri"], ch["s"] + ds * lsb,
-                                           ch["t"] + dt * lsb, off)}
+                c = {**ch, **S.bump_model(prep, frag, ch, ds=ds, dt=dt, offset=off)}
                 out.append(S.shade_fragments(prep, c))
     return np.stack(out)
 
@@ -80,7 +80,7 @@ def _check_against_model(prep, out):
     for key in ("tri", "x", "y"):                      # the same fragments, in the same order
         np.testing.assert_array_equal(out[key], frag[key])
     rtl = np.stack([out[c] for c in "rgb"], -1)
-    exact = S.shade_fragments(prep, {**ch, **S.polar_model(prep, frag["tri"], ch["s"], ch["t"])})
+    exact = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
     cand = _candidates(prep, frag, ch)
     hit = (cand == rtl[None]).all(-1).any(0)
     bad = np.flatnonzero(~hit)
@@ -105,10 +105,11 @@ def _xz_interval(prep, ch):
     """The least and largest d and s per lane that the bound allows."""
     lo, hi = {}, {}
     lanes = [f"{t}{k}" for t, k in prep["bump"]["lanes"]]
+    keys = [("d" if t == "l" else "s") + str(k) for t, k in prep["bump"]["lanes"]]
     for ds, dt in itertools.product((-1, 0, 1), repeat=2):
         for dl in itertools.product((-1, 0, 1), repeat=3):
-            out = S.xz_model(prep, ch, ds, dt, {lane: dl for lane in lanes})
-            for key, val in out.items():
+            out = S.bump_model(prep, None, ch, ds=ds, dt=dt, dl={lane: dl for lane in lanes})
+            for key, val in ((k, out[k]) for k in keys):
                 lo[key] = np.minimum(lo.get(key, val), val)
                 hi[key] = np.maximum(hi.get(key, val), val)
     step = 16 * 2.0 ** -14                              # one LSB of X, as a value
@@ -157,7 +158,7 @@ def test_xz_scene_rtl_within_bound(filter, light):
     assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
                           f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
     if filter == "nearest":
-        model = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag["tri"], ch)})
+        model = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
         assert (np.abs(rtl - model.astype(int)).max(-1) > 1).mean() < 0.01
 
 
@@ -170,7 +171,7 @@ def test_xz_flat_map_gives_the_unbumped_surface():
     1 level on every fragment (diffuse only: the power's slope would scale this bound)."""
     prep = _prep(bump={"method": "fenney_xz", "map": "flat"}, shading={"specular": False})
     frag, ch = S.model_fragments(prep)
-    bumped = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag["tri"], ch)})
+    bumped = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
     plain = S.shade_fragments(prep, {**ch, "d0": np.clip(ch["l0y"], 0, 1)})
     assert np.abs(bumped.astype(int) - plain.astype(int)).max() <= 1
 
@@ -193,11 +194,21 @@ def test_xz_light_length_on_the_torus():
     assert err["xshading"][0] < err["linear"][0] / 4
 
 
+def _angular_outputs(prep, ch, **offsets):
+    """bump_polar's float outputs and its bounds per fragment, its inputs formed as the
+    texture and bump_polar stages form them, with the offsets of the bound."""
+    texture, stage = prep["pipeline"].stages[1:3]
+    inp = stage.inputs(prep, texture.model(prep, None, ch, offsets), offsets)
+    params = stage.unit.params
+    return (S.angular.bump_polar_float(inp, **params),
+            S.angular.bump_polar_bounds(inp, **params))
+
+
 def _angular_interval(prep, ch):
     lo, hi = {}, {}
     for ds, dt in itertools.product((-1, 0, 1), repeat=2):
         for da in itertools.product((-1, 0, 1), repeat=3):
-            _, out, bound = S.angular_model(prep, ch, da=da, ds=ds, dt=dt)
+            out, bound = _angular_outputs(prep, ch, da=da, ds=ds, dt=dt)
             for key, src, shift, scale in (("d0", "diffuse", 1, 2.0 ** -14),
                                            ("p0", "specular", 5, 1)):
                 a = (np.floor(np.maximum(out[src] - bound[src], 0)).astype(np.int64)
@@ -252,7 +263,7 @@ def test_angular_flat_map_gives_the_unbumped_surface():
     lo, hi = _angular_interval(prep, ch)
     assert (exact >= lo["d0"] - 2.0 ** -14).all() and (exact <= hi["d0"] + 2.0 ** -14).all()
     plain = S.shade_fragments(prep, {**ch, "d0": exact})
-    bumped = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag["tri"], ch)})
+    bumped = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
     assert np.abs(plain.astype(int) - bumped.astype(int)).max() <= 2
 
 
@@ -268,11 +279,22 @@ def test_polar_scene_under_backpressure():
         np.testing.assert_array_equal(stalled[key], free[key])
 
 
+def _constants(prep):
+    """Each lane's k1, k2, k3 and Q, read back from the flat words the raster carries (k1 at
+    the top, 8 bits each)."""
+    out = {}
+    for n, (t, k) in enumerate(prep["bump"]["lanes"]):
+        word = prep["inputs"][f"f{n}"]
+        out.update({f"{t}{k}_{c}": (word >> 8 * (3 - j)) & 255
+                    for j, c in enumerate(("k1", "k2", "k3", "q"))})
+    return out
+
+
 def test_below_the_horizon_takes_the_horizon():
     """A light below a triangle's surface plane is held at elevation 0 (k2 = 0, k3 = 255):
     the patent's k2 = h sin T is an unsigned 8-bit value."""
     prep = _prep(lights=[{"to_light": [0.3, 0.2, -1.0]}])
-    c = prep["inputs"]
+    c = _constants(prep)
     T, B, N = (f.mean(1) for f in prep["bump"]["frames"])
     below = (N @ S._unit([0.3, 0.2, -1.0])) < -0.05
     assert below.sum() > 10
@@ -284,7 +306,7 @@ def test_polar_constants_rebuild_the_light():
     """k2, k3 and Q per triangle rebuild the light in the triangle's frame, within their
     8-bit steps: sin and cos of T from k2, k3 within 0.5/255, Q within half of 1/256 turn."""
     prep = _prep()
-    c, b = prep["inputs"], prep["bump"]
+    c, b = _constants(prep), prep["bump"]
     Nt = S._unit(b["frames"][2].sum(1))
     Tt = b["frames"][0].sum(1)
     Tt = S._unit(Tt - (Tt * Nt).sum(1)[:, None] * Nt)
@@ -315,7 +337,7 @@ def test_polar_model_against_reference():
 def test_polar_builds_its_units():
     prep = S.prepare(S.load(f"{SCENES}/bump_polar.toml"))
     assert units_in(ScenePipeline(**prep["params"])) == \
-        ["colour", "fenney_polar", "power_table", "raster", "texture", "tri_queue"]
+        ["colour", "fenney_polar", "power_table", "raster", "texture"]
     assert [p[0] for p in prep["pipeline"].parts()] == \
         ["raster", "texture", "fenney_polar", "power_table", "colour"]
     assert prep["params"]["bump_size"] == 256 and len(prep["bump"]["lanes"]) == 2

@@ -14,8 +14,8 @@ import sys
 import numpy as np
 import pytest
 
-from golden import scene as S
-from hdl.scene import ScenePipeline, units_in
+from scene import driver as S
+from scene.pipeline import ScenePipeline, units_in
 from hdl.span_unit.raster import Raster
 
 from .conftest import per_simulator
@@ -63,7 +63,7 @@ BAD = [
     ("[image]\nwidth = 64\n[camera]\nfov_y = 180.0", "camera.fov_y: must be a finite number in 1..170"),
     ("\n".join(["[[lights]]"] * 5), "lights: 5 lights; the pipeline shades at most 4"),
     ("[bump]\nmethod = \"fenney_xz\"\n" + "\n".join(["[[lights]]"] * 2),
-     "lights: 2 lights need 15 raster channels (depth, s, t and L', H' per light)"),
+     "lights: 2 lights need 15 raster channels (depth, s, t, l0x, l0y, l0z, h0x"),
 ]
 
 
@@ -162,7 +162,7 @@ def test_other_pipelines_on_amaranth(scene, tmp_path):
 
 def test_one_pixel_triangle():
     """A triangle that covers one pixel centre gives one fragment, coloured like the model."""
-    from sim.__main__ import simulate
+    from sim.simulators import simulate
     prep = S.prepare(S.parse({"image": {"width": 32, "height": 32}}))
     S_ = 1 << prep["params"]["sub_bits"]
     one = {k: v[:1].copy() for k, v in prep["inputs"].items()}

@@ -1,5 +1,5 @@
 """Per-fragment shading after the raster: per-pixel Phong (the quality reference), the specular
-power from a table, and the colour sum. The scene pipeline (``hdl.scene``) composes them."""
+power from a table, and the colour sum. The scene pipeline (``scene.pipeline``) composes them."""
 from .phong import Phong
 from .power import PowerTable
 from .colour import Colour

@@ -17,8 +17,7 @@ interpolates (linear channels, ``VALUE``: tiles, 14 fraction bits), wrapping at 
   A filtered X/Z texel can leave the valid diamond |X| + |Z| <= 255: texel_decode's guard
   meets it downstream.
 """
-import functools
-
+import numpy as np
 from amaranth.hdl import Cat, Mux
 
 from ..fixed import u
@@ -36,18 +35,11 @@ def weight_bits(b):
     return min(6, VALUE.frac_bits - b)
 
 
-@functools.lru_cache(maxsize=8)
-def texture_lut(kind, bump_map, bump_size, bump_depth, bits=8, bank=None):
-    """The texels of a bump map (``golden.bump`` derives the normals and encodes them, as it
-    does for the models): ``kind`` "sr" (S, R), "xz" (TexelX, TexelZ) or "polar" (theta,
-    phi of ``bits`` each); ``bank`` (a, b): only the texels whose s and t have those
-    parities."""
-    from golden import bump as maps
-    hi, lo, _ = maps.bump_texels(kind, bump_map, bump_size, bump_depth, bits)
-    if hi.shape != (bump_size, bump_size):
-        raise ValueError(f"bump_map {bump_map!r} is {hi.shape[1]} x {hi.shape[0]} texels, "
-                         f"not bump_size = {bump_size} square")
-    texels = (hi << bits) | lo
+def texture_lut(texels, bits=8, bank=None):
+    """A texture ROM: ``texels`` (size x size, row t, column s), each ``hi << bits | lo``, as
+    data (the scene's encoder makes them); ``bank`` (a, b): only the texels whose s and t have
+    those parities."""
+    texels = np.asarray(texels, np.int64)
     if bank is not None:
         texels = texels[bank[1]::2, bank[0]::2]
     texels = texels.ravel()
@@ -55,15 +47,20 @@ def texture_lut(kind, bump_map, bump_size, bump_depth, bits=8, bank=None):
                      u(2 * bits))
 
 
-def fetch(p, v, s, t, kind, bump_map, bump_size, bump_depth, filter, bits=8):
-    """Texel codes at the coordinates ``s``, ``t`` (keys, consumed): ``_hi`` and ``_lo``.
-    nearest: 2 stages (the ROM's read register, then its output registered); bilinear (8-bit
-    codes): 7."""
-    b = bump_size.bit_length() - 1
+def fetch_latency(filter):
+    """:func:`fetch`'s stages: nearest 2 (the ROM's read register, its output registered),
+    bilinear 7."""
+    return 2 if filter == "nearest" else 7
+
+
+def fetch(p, v, s, t, texels, filter, bits=8):
+    """Texel codes at the coordinates ``s``, ``t`` (keys, consumed): ``_hi`` and ``_lo``, in
+    ``fetch_latency(filter)`` stages. ``texels``: the map (see :func:`texture_lut`)."""
+    b = len(texels).bit_length() - 1
     top = VALUE.frac_bits
     if filter == "nearest":
         addr = Cat(v.pop(s)[top - b:top], v.pop(t)[top - b:top])
-        lut = texture_lut(kind, bump_map, bump_size, bump_depth, bits)
+        lut = texture_lut(texels, bits)
         v = p.stage(p.stage(v, _texel=rom(lut, addr, "texels")))
         texel = v.pop("_texel")
         return {**v, "_hi": texel[bits:2 * bits], "_lo": texel[:bits]}
@@ -82,7 +79,7 @@ def fetch(p, v, s, t, kind, bump_map, bump_size, bump_depth, filter, bits=8):
         sa = Mux(v["_s0"][0] == a, v["_s0"], v["_s1"])
         for c in (0, 1):
             tc = Mux(v["_t0"][0] == c, v["_t0"], v["_t1"])
-            lut = texture_lut(kind, bump_map, bump_size, bump_depth, bank=(a, c))
+            lut = texture_lut(texels, bank=(a, c))
             reads[f"_b{a}{c}"] = rom(lut, Cat(sa[1:], tc[1:]), f"bank{a}{c}")
     par = {"_ps": v.pop("_s0")[0], "_pt": v.pop("_t0")[0]}
     v.pop("_s1"), v.pop("_t1")

@@ -1,12 +1,14 @@
 """The scene driver (``design/scenes.md``): a scene file in, what the hardware takes out, and
-the two float images the RTL is compared with.
+the two float images the RTL is compared with: the mesh, the camera, culling, the encodings of
+the lights and the bump map, the framebuffer.
 
 - ``load(path)``: reads and validates a scene (``tomllib``); every error names the key.
 - ``prepare(scene)``: the mesh, transformed, projected and culled; per drawn triangle the
   raster's inputs (raw screen coordinates, per-edge constants (Ni.Nj - 1)/2, the channels'
   vertex values: depth, then N.L and N.H per light, or the normal for ``phong``); the pipeline's
   parameters and uniforms.
-- ``model(prep)``: the same method through float models with the RTL's formats (``model.png``).
+- ``model(prep)``: the same pipeline through its stages' models, with the RTL's formats
+  (``model.png``).
 - ``reference(prep)``: per-pixel Phong in float64 with the exact power (``reference.png``).
 
 Decisions where scenes.md is silent (docs/scenes.md lists them):
@@ -24,24 +26,25 @@ from pathlib import Path
 
 import numpy as np
 
-from hdl.scene import BUMPS as BUMPS_BUILT, MAX_CHANNELS, METHODS, ScenePipeline
-from hdl.units import make_unit
-from hdl.texture_unit import MAX_TEXTURE
+from golden import angular, bump as bumps, fenney, raster as raster_model
+from golden.bump import rotation
 from hdl.setup_unit.formats import EDGE, VALUE, coord
 from hdl.shade_unit.formats import COEF, RGB
+from hdl.texture_unit import MAX_TEXTURE
 
-from hdl.scene import ANGLE_BITS
+from .pipeline import BUMPS, METHODS, ScenePipeline, choose
+from .stage import lanes as lanes_of
+from .stages.fenney_polar import pack
+from .stages.texture import ANGLE_BITS
 
-from . import angular, bump as bumps, fenney, raster as raster_model, shade
-
-__all__ = ["SceneError", "load", "parse", "prepare", "model", "reference", "DEFAULTS"]
+__all__ = ["SceneError", "load", "parse", "prepare", "model", "reference", "framebuffer",
+           "DEFAULTS"]
 
 
 class SceneError(ValueError):
     """A scene file that cannot be rendered: the message names the key."""
 
 
-BUMPS = ("none", "fenney_xz", "fenney_polar", "angular")
 DEFAULTS = {
     "image": {"width": 256, "height": 256, "background": [0.0, 0.0, 0.0]},
     "camera": {"eye": [0.0, -3.5, 2.5], "target": [0.0, 0.0, 0.0], "up": [0.0, 0.0, 1.0],
@@ -150,40 +153,14 @@ def parse(data, name="scene"):
         raise SceneError("camera.target: must differ from camera.eye")
     if not np.linalg.norm(np.cross(f, cam["up"])) > 1e-9 * np.linalg.norm(f):
         raise SceneError("camera.up: must not be parallel to the view direction")
-    bump = scene["bump"]
-    if bump["method"] not in BUMPS_BUILT:
-        raise SceneError(f"bump.method: {bump['method']!r} is not rendered yet (bump scenes "
-                         f"are issue 11); use one of {', '.join(BUMPS_BUILT)}")
-    if bump["method"] != "none":
-        if scene["shading"]["method"] == "phong":
-            raise SceneError(f"shading.method: phong interpolates the normal, which "
-                             f"bump.method = {bump['method']} replaces; use none of them "
-                             f"together")
-        if bump["method"] in ("fenney_polar", "angular") and bump["filter"] != "nearest":
-            raise SceneError(f"bump.filter: {bump['method']} filters nearest only (its texels "
-                             f"are angles, which do not interpolate across their wrap); "
-                             f"bilinear is for fenney_xz")
-        if bump["method"] == "angular" and len(scene["lights"]) != 1:
-            raise SceneError(f"lights: bump.method = angular shades one light (its pipeline "
-                             f"rotates one L and one H), not {len(scene['lights'])}")
-        if bump["size"] & (bump["size"] - 1) or bump["size"] > MAX_TEXTURE:
-            raise SceneError(f"bump.size: must be a power of two up to {MAX_TEXTURE} (the "
-                             f"texture ROM wraps by its address bits), not {bump['size']}")
     most = ScenePipeline.RANGES["lights"][1]
     if len(scene["lights"]) > most:
         raise SceneError(f"lights: {len(scene['lights'])} lights; the pipeline shades at most "
                          f"{most}")
-    vectors = len(scene["lights"]) * (2 if scene["shading"]["specular"] else 1)
-    if bump["method"] == "fenney_xz":
-        n, what = 3 + 3 * vectors, "depth, s, t and L', H' per light"
-    elif bump["method"] in ("fenney_polar", "angular"):
-        n, what = 6, "depth, s, t and angles"
-    else:
-        n = 1 + (3 if scene["shading"]["method"] == "phong" else vectors)
-        what = "depth and N.L, N.H per light"
-    if n > MAX_CHANNELS:
-        raise SceneError(f"lights: {len(scene['lights'])} lights need {n} raster channels "
-                         f"({what}); the raster has at most {MAX_CHANNELS}")
+    try:                              # each stage's own checks, naming the scene key
+        choose(pipeline_params(scene))
+    except ValueError as e:
+        raise SceneError(str(e)) from None
     return scene
 
 
@@ -214,18 +191,6 @@ def _grid_triangles(m, n, wrap_i, wrap_j):
             a, b, c, d = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
             tris += [(a, b, c), (a, c, d)]
     return np.array(tris)
-
-
-def rotation(degrees):
-    """The mesh's rotation matrix: about x, then y, then z."""
-    rot = np.eye(3)
-    for axis, deg in enumerate(degrees):
-        c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
-        a, b = [k for k in range(3) if k != axis]
-        r = np.eye(3)
-        r[a, a], r[a, b], r[b, a], r[b, b] = c, -s, s, c
-        rot = r @ rot
-    return rot
 
 
 def mesh(scene):
@@ -270,12 +235,30 @@ def _raw(x, fmt):
     return np.clip(np.rint(np.asarray(x) * 2.0 ** fmt.frac_bits), fmt.min, fmt.max).astype(np.int64)
 
 
+def pipeline_params(scene, bump_size=None):
+    """The pipeline's parameters for a scene (``bump_size``: the map's, where it has its
+    own size)."""
+    img, mat, sh, b = scene["image"], scene["material"], scene["shading"], scene["bump"]
+    pipe = dict(screen_bits=max(4, (max(img["width"], img["height"]) - 1).bit_length()),
+                sub_bits=ScenePipeline.PARAMS["sub_bits"], method=sh["method"],
+                lights=len(scene["lights"]), specular=sh["specular"], power=sh["power"],
+                shininess=mat["shininess"])
+    if sh["power"] == "fenney" and sh["specular"]:
+        pipe["concentration"] = fenney_concentration(mat["shininess"])
+    if b["method"] != "none":
+        pipe.update(bump=b["method"], bump_map=b["map"], bump_size=bump_size or b["size"],
+                    bump_depth=b["depth"], filter=b["filter"])
+        if b["method"] == "angular":
+            pipe["rotation"] = b["rotation"]
+    return {**ScenePipeline.PARAMS, **pipe}
+
+
 def prepare(scene):
     """Everything the hardware and the models take; see the module's docstring."""
     img, cam, mat, sh = scene["image"], scene["camera"], scene["material"], scene["shading"]
     W, H = img["width"], img["height"]
-    screen_bits = max(4, (max(W, H) - 1).bit_length())
-    sub_bits = ScenePipeline.PARAMS["sub_bits"]
+    pipe = pipeline_params(scene)
+    screen_bits, sub_bits = pipe["screen_bits"], pipe["sub_bits"]
     pos, nrm, tris = mesh(scene)
     eye = np.array(cam["eye"])
     f = _unit(np.subtract(cam["target"], eye))
@@ -301,11 +284,6 @@ def prepare(scene):
     Hs = [_unit(L + V) for L in Ls]
     N = _unit(nrm)
     zmin = float(zc[drawn].min()) if len(drawn) else 1.0
-    pipe = dict(screen_bits=screen_bits, sub_bits=sub_bits, method=sh["method"],
-                lights=len(Ls), specular=sh["specular"], power=sh["power"],
-                shininess=mat["shininess"])
-    if sh["power"] == "fenney" and sh["specular"]:
-        pipe["concentration"] = fenney_concentration(mat["shininess"])
     bump = _bump(scene, drawn, Ls, Hs, pipe) if scene["bump"]["method"] != "none" else None
     spec = ScenePipeline.spec(**pipe)
     vert = {"depth": zmin / zc, "nx": N[:, 0], "ny": N[:, 1], "nz": N[:, 2]}
@@ -331,11 +309,11 @@ def prepare(scene):
                 val = vert[name][drawn[:, c]]
             inputs[f"v{ch}_{c}"] = _raw(val, VALUE)
     if bump:
-        inputs.update(bump["constants"])
+        inputs.update({k: v for k, v in bump["constants"].items() if k.startswith("e")})
         for n, (t, k) in enumerate(bump["lanes"] if scene["bump"]["method"] == "fenney_polar"
-                                   else ()):   # k1 k2 k3 Q, a flat word from the top down
-            inputs[f"f{n}"] = sum(inputs.pop(f"{t}{k}_{c}") << 8 * (3 - j)
-                                  for j, c in enumerate(("k1", "k2", "k3", "q")))
+                                   else ()):   # a lane's constants, its flat word
+            inputs[f"f{n}"] = pack({c: bump["constants"][f"{t}{k}_{c}"]
+                                    for c in ("k1", "k2", "k3", "q")})
     # uniforms: L and H (phong), and the colour coefficients
     uni = {}
     for j, (L, Hv) in enumerate(zip(Ls, Hs)):
@@ -380,10 +358,7 @@ def _bump(scene, drawn, Ls, Hs, pipe):
     if hi.shape[0] != hi.shape[1] or size & (size - 1) or size > MAX_TEXTURE:
         raise SceneError(f"bump.map: {b['map']!r} is {hi.shape[1]} x {hi.shape[0]} texels; a "
                          f"texture ROM needs a square power of two up to {MAX_TEXTURE}")
-    pipe.update(bump=b["method"], bump_map=b["map"], bump_size=size, bump_depth=b["depth"],
-                filter=b["filter"])
-    if b["method"] == "angular":
-        pipe["rotation"] = b["rotation"]
+    pipe["bump_size"] = size
     period = np.array(b["repeat"], float)
     st = bumps.texcoords(scene)[drawn]                                   # (n, 3, 2)
     st = st[:, :1] + np.mod(st - st[:, :1] + period / 2, period) - period / 2
@@ -401,9 +376,9 @@ def _bump(scene, drawn, Ls, Hs, pipe):
     Tt = _unit(Tt - np.einsum("ij,ij->i", Tt, Nt)[:, None] * Nt)
     Bt = np.cross(Nt, Tt)
     consts = {}
-    lanes = ScenePipeline.spec(**pipe).lanes
+    lanes = lanes_of(pipe)
     out = {"st": st, "constants": consts, "lanes": lanes, "normals": normals,
-           "frames": frames, "size": size, "filter": b["filter"]}
+           "frames": frames, "size": size, "filter": b["filter"], "texels": (hi, lo)}
     if b["method"] == "angular":
         # the normal's angles (seed 003: phi from x, theta from z) and the twist psi of the
         # texture's frame about N from the rotations' frame (e_theta, e_phi, N), in turns;
@@ -504,137 +479,45 @@ def _colour_float(scene, d, p):
     return np.rint(255 * np.clip(out, 0, 1)).astype(np.uint8)
 
 
-def model(prep):
-    """The float model of the scene's method with the RTL's formats: the raster's float model
-    (golden.raster) from the same raw inputs, the shading units' models, the quantised
-    uniforms, the same depth test. Returns (image, covered, fragments)."""
+def model(prep, **bound):
+    """The float model of the scene's pipeline with the RTL's formats: each stage's model in
+    turn (the raster's float model from the same raw inputs, then the stages' models of the
+    same steps), the quantised uniforms, the same depth test. Returns (image, covered,
+    fragments)."""
     frag, ch = model_fragments(prep)
-    if prep["bump"]:
-        ch.update(bump_model(prep, frag["tri"], ch))
-    img, cov = framebuffer(prep["size"], frag["x"], frag["y"], ch["depth"],
-                           shade_fragments(prep, ch), prep["scene"]["image"]["background"])
+    ch = run_models(prep, frag, ch, prep["pipeline"].stages[1:], **bound)
+    rgb = np.stack([ch[c] for c in RGB], -1).astype(np.uint8)
+    img, cov = framebuffer(prep["size"], frag["x"], frag["y"], ch["depth"], rgb,
+                           prep["scene"]["image"]["background"])
     return img, cov, len(frag["x"])
 
 
 def model_fragments(prep):
-    """The raster's float model on the scene: its fragments, and the channels by name."""
-    spec = prep["pipeline"]
-    frag = raster_model.run(prep["inputs"], **spec.parts()[0][1])     # the raster's params
-    return frag, {name: frag[f"v{k}"] for k, (name, _) in enumerate(spec.channels)}
+    """The raster's float model on the scene: its fragments, and the values by name."""
+    return prep["pipeline"].raster.model(prep)
 
 
-def shade_fragments(prep, ch):
-    """The per-fragment units' models after the raster (and the bump unit): phong, the power,
-    colour. ``ch``: values by name (d and s per light, or the normal). Returns rgb (n, 3)."""
-    q, uni = prep["params"], prep["uniforms"]
+def run_models(prep, frag, ch, stages, **bound):
+    """``stages``' models in turn on the values ``ch`` (by name) of fragments ``frag``;
+    ``bound``: the tests' offsets, each stage takes those it knows (``scene/stages/``)."""
     ch = dict(ch)
-    lights = range(q["lights"])
-    if q["method"] == "phong":
-        inp = {k: np.rint(ch[k] * 2 ** VALUE.frac_bits) for k in ("nx", "ny", "nz")}
-        inp.update({k: np.full(len(ch["nx"]), v) for k, v in uni.items()})
-        out, _ = shade.phong(inp, lights=q["lights"], specular=q["specular"])
-        ch.update({k: v * VALUE.lsb for k, v in out.items()})
-    if q["specular"]:
-        for j in (j for j in lights if f"p{j}" not in ch):    # angular gives p itself
-            s_raw = np.rint(ch[f"s{j}"] * 2 ** VALUE.frac_bits)
-            if q["power"] == "table":
-                ch[f"p{j}"] = shade.power_table(s_raw, q["shininess"], q["mant_bits"]) \
-                    if "mant_bits" in q else shade.power_table(s_raw, q["shininess"])
-            else:
-                x = np.clip(np.floor(s_raw / 16), 0, 1023)
-                ch[f"p{j}"] = fenney.power_int(x, q["concentration"])
-    inp = {f"d{j}": np.rint(ch[f"d{j}"] * 2 ** VALUE.frac_bits) for j in lights}
-    inp.update({f"p{j}": ch[f"p{j}"] for j in lights if q["specular"]})
-    inp.update(uni)
-    rgb = shade.colour(inp, lights=q["lights"], specular=q["specular"])
-    return np.stack([rgb[c] for c in RGB], -1).astype(np.uint8)
+    for stage in stages:
+        ch = stage.model(prep, frag, ch, bound)
+    return ch
 
 
-def bump_model(prep, tri, ch, **bound):
-    """N.L and N.H per light (d and s, values) of the scene's bump method per fragment."""
-    if prep["params"]["bump"] == "fenney_polar":
-        return polar_model(prep, tri, ch["s"], ch["t"], bound.get("offset"))
-    if prep["params"]["bump"] == "angular":
-        return angular_model(prep, ch)[0]
-    return xz_model(prep, ch, **bound)
+def bump_model(prep, frag, ch, **bound):
+    """The bump stages' models (texture fetch to N.L and N.H, or d and p for angular)."""
+    return run_models(prep, frag, ch, [s for s in prep["pipeline"].stages if s.bump],
+                      **bound)
 
 
-def angular_inputs(prep, ch, da=(0, 0, 0), ds=0, dt=0):
-    """bump_polar's inputs per fragment, as the pipeline forms them: the normal's angles and
-    the twist from the channels' raw values (turns: their top ANGLE_BITS fraction bits), the
-    nearest (phi, theta) texel, phi_B + psi; L and H from the uniforms. ``da``, ``ds``,
-    ``dt``: the tests' bound, added to the raw values of phi_N, theta_N, psi and s, t."""
-    b, lsb, full = prep["bump"], VALUE.lsb, 1 << ANGLE_BITS
-    raw = lambda v: np.rint(np.asarray(v) / lsb).astype(np.int64)
-    code = lambda key, d: ((raw(ch[key]) + d) >> (VALUE.frac_bits - ANGLE_BITS)) & (full - 1)
-    rs, rt = raw(ch["s"]) + ds, raw(ch["t"]) + dt
-    inp = {"phi_n": code("phin", da[0]), "theta_n": code("thetan", da[1]),
-           "phi_b": (bumps.fetch(b["phi"], rs, rt) + code("psi", da[2])) & (full - 1),
-           "theta_b": bumps.fetch(b["theta"], rs, rt)}
-    inp.update({k: np.full(len(rs), prep["uniforms"][k]) for k in
-                ("phi_l", "theta_l", "phi_h", "theta_h")})
-    return inp
-
-
-def angular_model(prep, ch, **bound):
-    """seed 003 per fragment: ``golden.angular.bump_polar_float`` (rotations paper or exact,
-    the illumination's tables), rounded to its u16 outputs; d = diffuse >> 1 (a value) and
-    p = specular >> 5 (a power), as the pipeline takes them. Returns ``(channels, float
-    outputs, the unit's bounds)``."""
-    params = make_unit("bump_polar", spec=True, **prep["pipeline"].bump_polar_params).params
-    inp = angular_inputs(prep, ch, **bound)
-    out = angular.bump_polar_float(inp, **params)
-    diffuse, specular = (np.rint(out[k]).astype(np.int64) for k in ("diffuse", "specular"))
-    return ({"d0": (diffuse >> 1) * VALUE.lsb, "p0": specular >> 5}, out,
-            angular.bump_polar_bounds(inp, **params))
-
-
-def xz_model(prep, ch, ds=0, dt=0, dl=None, offset=None):
-    """fenney_xz per fragment: the X/Z texels fetched (``golden.bump.fetch``: nearest, or the
-    bilinear filter bit for bit) and decoded (``golden.fenney.texel_decode``), each lane's
-    interpolated vector as the patent's s8 (round(127 v), clamped to +-127, from its raw
-    value), dotted (``golden.fenney.dot_float``, h = 1, plain or renormalised as the pipeline's
-    ``normalize``, rounded to the 10-bit X); X << 4 as
-    a value. The tests' bound: ``ds``, ``dt`` added to the raw texture coordinates, ``dl``
-    ``{lane: (dx, dy, dz)}`` to a vector's raw components, ``offset`` ``{key: n}`` to X."""
-    b, lsb = prep["bump"], VALUE.lsb
-    raw = lambda v: np.rint(np.asarray(v) / lsb).astype(np.int64)
-    codes = [bumps.fetch(b[c], raw(ch["s"]) + ds, raw(ch["t"]) + dt, b["filter"])
-             for c in ("X", "Z")]
-    inp = fenney.texel_decode(*codes)
-    out = {}
-    for lane, k in b["lanes"]:
-        d = (dl or {}).get(f"{lane}{k}", (0, 0, 0))
-        for a, da in zip("xyz", d):
-            r = raw(ch[f"{lane}{k}{a}"]) + da
-            inp[f"l{a}"] = np.clip((r * 127 + (1 << 13)) >> 14, -127, 127)
-        inp["h"] = np.full(len(r), 255)
-        key = f"{'d' if lane == 'l' else 's'}{k}"
-        q = prep["params"]
-        x = np.clip(np.rint(fenney.dot_float(inp, q.get("normalize", False), q.get("rsqrt_bits")))
-                    + (offset or {}).get(key, 0), 0, 1023)
-        out[key] = (x.astype(np.int64) << 4) * lsb
-    return out
-
-
-def polar_model(prep, tri, s, t, offset=None):
-    """fenney_polar per fragment (``golden.fenney.polar_float``, rounded): the nearest S/R
-    texel at (s, t), each lane's per-triangle constants; d and s (N.L and N.H per light) as
-    the pipeline widens the intensity, in values. ``offset``: ``{key: n}`` added to a lane's
-    intensity before it is clamped (the tests' bound on the RTL's rounding)."""
-    offset = offset or {}
-    b = prep["bump"]
-    raw_s, raw_t = (np.rint(np.asarray(c) / VALUE.lsb).astype(np.int64) for c in (s, t))
-    texel = {c: bumps.fetch(b[c], raw_s, raw_t) for c in ("S", "R")}
-    out = {}
-    for lane, k in b["lanes"]:
-        c = {n: b["constants"][f"{lane}{k}_{n}"][tri] for n in ("k1", "k2", "k3", "q")}
-        key = f"{'d' if lane == 'l' else 's'}{k}"
-        i = np.clip(np.rint(fenney.polar_float({"s": texel["S"], "r": texel["R"],
-                                                **c})) + offset.get(key, 0), 0, 255)
-        i = i.astype(np.int64)
-        out[key] = ((i << 6) | (i >> 2)) * VALUE.lsb
-    return out
+def shade_fragments(prep, ch, frag=None):
+    """The stages after the raster and the bump stages (phong, the power, colour) on the
+    values ``ch``: rgb (n, 3)."""
+    stages = [s for s in prep["pipeline"].stages[1:] if not s.bump]
+    ch = run_models(prep, frag, ch, stages)
+    return np.stack([ch[c] for c in RGB], -1).astype(np.uint8)
 
 
 def reference(prep):

@@ -1,0 +1,159 @@
+"""A scene's pipeline: the stages the scene calls for, in order, each a component joined to the
+next by an ``amaranth.lib.stream`` (``wiring.connect``).
+
+    triangles -> raster -> [texture -> texel_decode -> fenney_dot]   bump = fenney_xz
+                           [texture -> fenney_polar]                  bump = fenney_polar
+                           [texture -> bump_polar]                    bump = angular
+                           [phong]                                    method = phong
+                        -> [power_table | fenney_power]               specular
+                        -> colour -> fragments (tri, x, y, depth, r, g, b)
+
+``STAGES`` is the one place where the stages are chosen: each says itself whether a scene
+wants it (``scene/stages/``, one file each; README "Adding an effect"). The raster's
+channels are the ones its stages read, in the order of the list, depth first; its flat words
+are theirs too. Lights and material colours are uniforms: ports ``u_<field>``, which a host
+sets before it streams triangles. The depth test and the framebuffer are not here: they model
+external memory (a 256 x 256 frame with depth is 2.6 Mbit, more than the 1 Mbit of block RAM
+of an ECP5-25F), and the renderer keeps them.
+"""
+from amaranth.hdl import Module
+from amaranth.lib import wiring
+from amaranth.lib.wiring import Out
+
+from hdl.fixed import Field
+from hdl.illum_unit.fenney_dot import FenneyDot as DotUnit
+from hdl.setup_unit.formats import MODES, VALUE
+from hdl.shade_unit.formats import LEVEL, RGB
+from hdl.span_unit import Raster as RasterUnit
+from hdl.texture_unit import FILTERS, MAX_TEXTURE
+from hdl.unit import Unit
+from hdl.units import PIPELINES
+
+from .stage import StageUnit
+from .stages.bump_polar import BumpPolar
+from .stages.colour import Colour
+from .stages.fenney_dot import FenneyDot
+from .stages.fenney_polar import FenneyPolar
+from .stages.phong import Phong
+from .stages.power import Power
+from .stages.raster import Raster
+from .stages.texel_decode import TexelDecode
+from .stages.texture import Texture
+
+__all__ = ["ScenePipeline", "STAGES", "METHODS", "BUMPS", "choose", "units_in"]
+
+STAGES = (Raster, Texture, TexelDecode, FenneyDot, FenneyPolar, BumpPolar, Phong, Power, Colour)
+METHODS = MODES + ("phong",)
+BUMPS = ("none", "fenney_xz", "fenney_polar", "angular")
+MAX_CHANNELS = RasterUnit.RANGES["channels"][1]
+SOURCE = {"x": "_pix_x", "y": "_pix_y"}          # the fragment's pixel, as the stages carry it
+
+
+class ScenePipeline(Unit):
+    NAME = "scene"
+    DOC = "A scene's pipeline: raster -> (bump stages) -> (phong) -> (power) -> colour"
+    PARAMS = {"screen_bits": 8, "sub_bits": 4, "method": "xshading", "lights": 1,
+              "specular": True, "power": "table", "shininess": 32.0, "mant_bits": 6,
+              "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
+              "bump": "none", "bump_map": "bricks", "bump_size": 256, "bump_depth": 1.0,
+              "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
+              "rsqrt_bits": 12}
+    RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
+              "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
+              "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
+              "rsqrt_iters": (1, 3), "bump": BUMPS, "bump_map": None,
+              "bump_size": (16, MAX_TEXTURE), "bump_depth": (0.0, 1e9), "filter": FILTERS,
+              "trig_bits": (4, 16), "rotation": ("paper", "exact"),
+              "rsqrt_bits": DotUnit.RANGES["rsqrt_bits"]}
+    status_ports = {"busy": Out(1), "culled": Out(32)}
+
+    def validate(self, **q):
+        self.stages = choose(q)
+
+    @property
+    def raster(self):
+        return self.stages[0]
+
+    @property
+    def channels(self):
+        """The raster's channels: ``(name, mode)``, depth first."""
+        return [(n, m) for n, m, _ in self.raster.all_channels]
+
+    def parts(self):
+        """The stages built: ``(name, params, why)``."""
+        return [(s.name, s.params, s.why) for s in self.stages]
+
+    def part_latency(self, name, params=None):
+        return next(s.latency for s in self.stages if s.name == name)
+
+    @property
+    def inputs(self):
+        return list(self.raster.unit.inputs)
+
+    @property
+    def uniforms(self):
+        seen, out = set(), []
+        for stage in self.stages:
+            out += [f for f in stage.uniforms if f.name not in seen]
+            seen |= {f.name for f in stage.uniforms}
+        return out
+
+    @property
+    def outputs(self):
+        frag = self.raster.unit.outputs
+        return ([f for f in frag if f.name in ("tri", "x", "y")] + [Field("depth", VALUE)]
+                + [Field(c, LEVEL) for c in RGB])
+
+    @property
+    def shading_latency(self):
+        return sum(s.latency for s in self.stages[1:])
+
+    @property
+    def latency(self):
+        """From a triangle in to its first fragment out, when nothing waits."""
+        return self.raster.latency + self.shading_latency
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.raster = raster = RasterUnit(**self.raster.params)
+        wiring.connect(m, wiring.flipped(self.i), raster.i)
+        last, rename, busy = raster.o, self.raster.rename(), raster.busy
+        rest = self.stages[1:]
+        for k, stage in enumerate(rest):          # the last gives the fragment's fields
+            out = self.outputs if stage is rest[-1] else None
+            unit = StageUnit(stage, last.payload.shape(), out, rename, source=SOURCE)
+            m.submodules[stage.name] = unit
+            wiring.connect(m, last, unit.i)
+            m.d.comb += [getattr(unit, f"u_{f.name}").eq(getattr(self, f"u_{f.name}"))
+                         for f in stage.uniforms]
+            for valid in unit.valids:
+                busy = busy | valid
+            last, rename = unit.o, None
+        wiring.connect(m, last, wiring.flipped(self.o))
+        m.d.comb += [self.busy.eq(busy), self.culled.eq(raster.culled)]
+        return m
+
+
+PIPELINES[ScenePipeline.NAME] = ScenePipeline
+
+
+def choose(q):
+    """The stages that the pipeline's parameters ``q`` call for, each validated, the raster
+    joined to the channels and flat words they read. A ``ValueError`` names the scene key."""
+    stages = [cls(q) for cls in STAGES if cls.wanted(q)]
+    for stage in stages:
+        stage.validate(q)
+    channels = [c for stage in stages for c in stage.channels]
+    if len(channels) > MAX_CHANNELS:
+        raise ValueError(f"lights: {q['lights']} lights need {len(channels)} raster channels "
+                         f"({', '.join(n for n, _, _ in channels)}); the raster has at most "
+                         f"{MAX_CHANNELS}")
+    stages[0].join(channels, [w for stage in stages for w in stage.flat])
+    return stages
+
+
+def units_in(design):
+    """The names of the stages in an elaborated scene pipeline (its submodules')."""
+    from amaranth.hdl import Fragment
+    frag = Fragment.get(design, None)
+    return sorted(name for _, name, *_ in frag.subfragments)

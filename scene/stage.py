@@ -1,0 +1,122 @@
+"""A scene stage: one object that says everything about one step of a scene's pipeline.
+
+A stage subclasses :class:`Stage` and supplies
+
+- ``wanted(q)``: whether a scene (the pipeline's parameters ``q``) calls for it;
+- ``name``: its submodule's name in the composed top, and its unit's in ``metrics.json``;
+- ``channels``: the raster channels it reads, ``(name, mode, group)``;
+  ``flat``: the names of the flat words (a triangle's constants) it reads from the raster;
+- ``uniforms``: the registers it reads (``u_<field>`` ports of the top);
+- ``params``: its unit's parameters, from the scene's; ``why``: the scene key that calls for it;
+- ``validate(q)``: its checks on the scene, raising ``ValueError`` that names the scene key;
+- ``latency``: its register stages, from its units;
+- ``rtl(p, v, uni)``: its stages on the :class:`hdl.unit.Pipeline` ``p``, from the values
+  ``v`` of the stage before it (named as the stages name them); returns the values after it;
+- ``model(prep, frag, ch, bound)``: the same step in the float or integer model, on numpy
+  arrays per fragment; ``bound``: the tests' offsets, each stage takes the ones it knows.
+
+:class:`StageUnit` makes a stage a component with ``i`` and ``o`` streams, so the composed top
+joins stages with ``wiring.connect``. Inside a stage the units share one enable (the
+:class:`hdl.unit.Pipeline`), which is cheap; between stages the handshake is the stream's.
+"""
+from amaranth.hdl import Module, Shape, Signal, Value
+from amaranth.lib import data, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from hdl.unit import Pipeline
+
+__all__ = ["Stage", "StageUnit", "Link", "lanes", "lane_key"]
+
+
+class Stage:
+    name = None
+    bump = False           # a bump stage: texel fetch to N.L and N.H
+    channels = ()
+    flat = ()
+    uniforms = ()
+    params = {}
+    why = ""
+
+    def __init__(self, q):
+        self.q = q
+
+    @classmethod
+    def wanted(cls, q):
+        raise NotImplementedError
+
+    def validate(self, q):
+        """Checks on the scene beyond the parameters' ranges."""
+
+    @property
+    def latency(self):
+        raise NotImplementedError
+
+    def rtl(self, p, v, uni):
+        raise NotImplementedError
+
+    def model(self, prep, frag, ch, bound):
+        raise NotImplementedError
+
+    def describe(self):
+        """The stage in ``metrics.json``: its unit, why, its parameters and latency."""
+        return {"name": self.name, "why": self.why, "params": self.params,
+                "latency": self.latency}
+
+
+class Link:
+    """A handshake inside a stage's pipeline, joined to its ports when it is elaborated."""
+
+    def __init__(self):
+        self.valid, self.ready = Signal(), Signal()
+
+
+class StageUnit(wiring.Component):
+    """A stage as a component: ``i`` (the layout ``layout_in``, its fields renamed by
+    ``rename`` on the way in: the raster's ``v<k>`` are the channels' names) and ``o`` (the
+    values the stage gives; where it is the last one, ``out_fields`` in their order, each
+    from the value ``source`` names), and a port ``u_<name>`` per uniform. The datapath is
+    built here, so the output layout is known; ``elaborate`` joins it to the ports.
+    ``valids``: every stage register's valid bit."""
+
+    def __init__(self, stage, layout_in, out_fields=None, rename=None, source=None):
+        self.stage = stage
+        self._m = m = Module()
+        self._in = {name: Signal(f.shape, name=f"i_{name}") for name, f in layout_in}
+        self._uni = {f.name: Signal(f.fmt.shape, name=f"u_{f.name}") for f in stage.uniforms}
+        self._li, self._lo = Link(), Link()
+        p = Pipeline(m, self._li, self._lo)
+        v = stage.rtl(p, {(rename or {}).get(k, k): x for k, x in self._in.items()}, self._uni)
+        if p.stages != stage.latency:
+            raise AssertionError(f"stage {stage.name} has {p.stages} stages, its latency says "
+                                 f"{stage.latency}")
+        self._valid, self.valids = p.valid, p.valids
+        if out_fields is not None:
+            source = source or {}
+            v = {f.name: Value.cast(v[source.get(f.name, f.name)]) for f in out_fields}
+            v = {f.name: x[:f.fmt.width].as_signed() if f.fmt.signed else x[:f.fmt.width]
+                 for f, x in zip(out_fields, v.values())}
+        self._out = {k: Value.cast(x) for k, x in v.items()}
+        layout_out = data.StructLayout({k: Shape.cast(x.shape()) for k, x in self._out.items()})
+        super().__init__({"i": In(stream.Signature(layout_in)),
+                          "o": Out(stream.Signature(layout_out)),
+                          **{f"u_{k}": In(s.shape()) for k, s in self._uni.items()}})
+
+    def elaborate(self, platform):
+        m = self._m
+        m.d.comb += [self._li.valid.eq(self.i.valid), self.i.ready.eq(self._li.ready),
+                     self._lo.valid.eq(self._valid), self.o.valid.eq(self._valid),
+                     self._lo.ready.eq(self.o.ready)]
+        m.d.comb += [s.eq(self.i.payload[k]) for k, s in self._in.items()]
+        m.d.comb += [self.o.payload[k].eq(x) for k, x in self._out.items()]
+        m.d.comb += [s.eq(getattr(self, f"u_{k}")) for k, s in self._uni.items()]
+        return m
+
+
+def lanes(q):
+    """A bump stage's lanes: ``(vector, light)``, L per light and, with specular, H."""
+    return [(t, k) for k in range(q["lights"]) for t in ("l", "h") if q["specular"] or t == "l"]
+
+
+def lane_key(t, k):
+    """The value a lane gives: d (N.L) for an L lane, s (N.H) for an H lane."""
+    return f"{'d' if t == 'l' else 's'}{k}"

@@ -1,0 +1,1 @@
+"""The scene stages, one file each (``scene/stage.py`` says what a stage declares)."""

@@ -1,0 +1,94 @@
+"""The bump_polar stage (seed 003): L and H rotated into the frame of the interpolated normal
+(its angles phi_N, theta_N and the texture frame's twist psi, linear channels in turns), then
+the law-of-cosines illumination against the texel's (phi_B + psi, theta_B)."""
+import numpy as np
+from amaranth.hdl import Cat, Const
+
+from golden import angular
+from hdl.fixed import Field, binary_angle
+from hdl.illum_unit.bump_polar import BumpPolar as Unit
+from hdl.setup_unit.formats import VALUE
+
+from ..stage import Stage
+from .texture import ANGLE_BITS, raw
+
+LIGHT = ("phi_l", "theta_l", "phi_h", "theta_h")      # L and H in polar form, world frame
+
+
+class BumpPolar(Stage):
+    bump = True
+    name = "bump_polar"
+    channels = (("phin", "linear", 0), ("thetan", "linear", 0), ("psi", "linear", 0))
+
+    @classmethod
+    def wanted(cls, q):
+        return q["bump"] == "angular"
+
+    @property
+    def uniforms(self):
+        return [Field(n, binary_angle(ANGLE_BITS)) for n in LIGHT]
+
+    @property
+    def params(self):
+        q = self.q
+        return dict(method=q["rotation"], angle_bits=ANGLE_BITS,
+                    shininess=max(1, min(1024, round(q["shininess"]))))
+
+    @property
+    def why(self):
+        return f"bump.method = angular, bump.rotation = {self.q['rotation']}: rotation x 2, illum"
+
+    def validate(self, q):
+        if q["lights"] != 1:
+            raise ValueError(f"lights: bump.method = angular shades one light (its pipeline "
+                             f"rotates one L and one H), not {q['lights']}")
+
+    @property
+    def unit(self):
+        return Unit.spec(**self.params)
+
+    @property
+    def latency(self):
+        return 1 + self.unit.latency                     # the angles from the channels
+
+    def describe(self):
+        u = self.unit
+        return {**super().describe(), "parts": [
+            {"name": "rotation", "why": "L into N's frame", "latency": u.rotation.latency},
+            {"name": "rotation", "why": "H into N's frame", "latency": u.rotation.latency},
+            {"name": "illum", "why": "law of cosines, diffuse and specular tables",
+             "latency": u.illum.latency}]}
+
+    def rtl(self, p, v, uni):
+        top, ab = VALUE.frac_bits, ANGLE_BITS            # turns: the top fraction bits
+        ang = lambda key: v.pop(key)[top - ab:top]
+        theta_b, phi_b = v.pop("_hi"), v.pop("_lo")
+        v = p.stage(v, phi_n=ang("phin"), theta_n=ang("thetan"),
+                    phi_b=(phi_b + ang("psi"))[:ab], theta_b=theta_b,
+                    **{k: uni[k] for k in LIGHT})
+        v = self.unit.datapath(p, v)
+        v.pop("dot_l"), v.pop("dot_h")
+        # diffuse (u16, 15 fraction bits) >> 1 is a value; specular >> 5 a power
+        v["d0"] = Cat(v.pop("diffuse")[1:], Const(0, 1)).as_signed()
+        v["p0"] = v.pop("specular")[5:]
+        return v
+
+    def inputs(self, prep, ch, bound):
+        """The unit's inputs per fragment, as the RTL forms them: the channels' top
+        ANGLE_BITS fraction bits, phi_B + psi; ``bound``: ``da`` (three offsets) added to the
+        raw phi_N, theta_N and psi."""
+        full = 1 << ANGLE_BITS
+        da = bound.get("da", (0, 0, 0))
+        code = lambda key, d: ((raw(ch[key]) + d) >> (VALUE.frac_bits - ANGLE_BITS)) & (full - 1)
+        inp = {"phi_n": code("phin", da[0]), "theta_n": code("thetan", da[1]),
+               "phi_b": (ch["_lo"] + code("psi", da[2])) & (full - 1), "theta_b": ch["_hi"]}
+        inp.update({k: np.full(len(inp["phi_n"]), prep["uniforms"][k]) for k in LIGHT})
+        return inp
+
+    def model(self, prep, frag, ch, bound):
+        """``golden.angular.bump_polar_float`` (rotations paper or exact, the illumination's
+        tables), rounded to its u16 outputs; d = diffuse >> 1 (a value), p = specular >> 5."""
+        out = angular.bump_polar_float(self.inputs(prep, ch, bound), **self.unit.params)
+        diffuse, specular = (np.rint(out[k]).astype(np.int64) for k in ("diffuse", "specular"))
+        ch = {k: x for k, x in ch.items() if k not in ("phin", "thetan", "psi", "_hi", "_lo")}
+        return {**ch, "d0": (diffuse >> 1) * VALUE.lsb, "p0": specular >> 5}

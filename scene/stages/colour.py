@@ -1,0 +1,44 @@
+"""The colour stage (scenes.md "Lighting"): ambient + per light kd d colour + ks p, summed,
+clamped, to 8-bit RGB; bit-exact. Its coefficients are uniforms."""
+import numpy as np
+
+from golden import shade
+from hdl.shade_unit.colour import Colour as Unit, colour_lanes
+from hdl.shade_unit.formats import RGB, colour_fields
+
+from ..stage import Stage
+from .texture import raw
+
+
+class Colour(Stage):
+    name = "colour"
+    why = "material, lights"
+
+    @classmethod
+    def wanted(cls, q):
+        return True
+
+    @property
+    def params(self):
+        return dict(lights=self.q["lights"], specular=self.q["specular"])
+
+    @property
+    def uniforms(self):
+        return colour_fields(self.q["lights"], self.q["specular"])
+
+    @property
+    def latency(self):
+        return Unit.spec(**self.params).latency
+
+    def rtl(self, p, v, uni):
+        return colour_lanes(p, {**v, **{f.name: uni[f.name] for f in self.uniforms}},
+                            self.q["lights"], self.q["specular"])
+
+    def model(self, prep, frag, ch, bound):
+        q, ch = self.q, dict(ch)
+        lights = range(q["lights"])
+        inp = {f"d{k}": raw(ch.pop(f"d{k}")) for k in lights}
+        inp.update({f"p{k}": ch.pop(f"p{k}") for k in lights if q["specular"]})
+        inp.update(prep["uniforms"])
+        rgb = shade.colour(inp, **self.params)
+        return {**ch, **{c: np.asarray(rgb[c]) for c in RGB}}

@@ -1,0 +1,81 @@
+"""The fenney_dot stage (seed 004 eq 1): the bump vector dotted with each lane's interpolated
+vector, L' and H' in the tangent frame, quadratic with each vector's own per-edge constants
+(seed 000 section 2) or linear: N.L and N.H per light."""
+import numpy as np
+
+from golden import fenney
+from hdl.illum_unit.fenney_dot import FenneyDot as Unit, dot_lanes
+from hdl.setup_unit.formats import VALUE
+from amaranth.hdl import Cat, Const, Mux
+
+from ..stage import Stage, lane_key, lanes
+from .texture import raw
+
+
+class FenneyDot(Stage):
+    bump = True
+    name = "fenney_dot"
+
+    @classmethod
+    def wanted(cls, q):
+        return q["bump"] == "fenney_xz"
+
+    @property
+    def lanes(self):
+        return lanes(self.q)
+
+    @property
+    def channels(self):
+        """Each lane's vector, its components a group of edge constants of their own."""
+        return [(f"{t}{k}{a}", self.q["method"], 1 + n) for n, (t, k) in enumerate(self.lanes)
+                for a in "xyz"]
+
+    @property
+    def params(self):
+        """The patent's plain dot product, or the bump vector renormalised (a hardware
+        choice, not a scene key: ``make tradeoffs`` sweeps it)."""
+        return dict(normalize=self.q["normalize"], rsqrt_bits=self.q["rsqrt_bits"])
+
+    @property
+    def why(self):
+        vectors = f"L{' and H' if self.q['specular'] else ''} per light"
+        return f"bump.method = fenney_xz: {len(self.lanes)} lanes ({vectors})"
+
+    @property
+    def latency(self):
+        return 1 + Unit.spec(**self.params).latency        # the vectors' conversion to s8
+
+    def rtl(self, p, v, uni):
+        conv = {}             # the interpolated vector as the patent's s8: round(127 v), clamped
+        for t, k in self.lanes:
+            for a in "xyz":
+                c = v.pop(f"{t}{k}{a}")
+                r = ((c << 7) - c + (1 << (VALUE.frac_bits - 1))) >> VALUE.frac_bits
+                conv[f"_{t}{k}{a}"] = Mux(r > 127, 127, Mux(r < -127, -127, r))[:8].as_signed()
+        v = p.stage(v, **conv)
+        lanes = [tuple(f"_{t}{k}{a}" for a in "xyz") + (f"_h{t}{k}", f"_x{t}{k}")
+                 for t, k in self.lanes]
+        v.update({f"_h{t}{k}": Const(255, 8) for t, k in self.lanes})   # h = 1
+        v = dot_lanes(p, v, "x", "y", "z", lanes, **self.params)
+        for t, k in self.lanes:             # X / 1024 as a value: X << 4
+            v[lane_key(t, k)] = Cat(Const(0, 4), v.pop(f"_x{t}{k}"), Const(0, 2)).as_signed()
+        return v
+
+    def model(self, prep, frag, ch, bound):
+        """Each lane's vector as the patent's s8 (round(127 v), clamped to +-127, from its raw
+        value), dotted (``golden.fenney.dot_float``, h = 1, plain or renormalised), rounded to
+        the 10-bit X; X << 4 as a value. ``bound``: ``dl`` ``{lane: (dx, dy, dz)}`` added to a
+        vector's raw components, ``offset`` ``{key: n}`` to X."""
+        ch = dict(ch)
+        inp = {a: ch.pop(a) for a in "xyz"}
+        for t, k in self.lanes:
+            d = bound.get("dl", {}).get(f"{t}{k}", (0, 0, 0))
+            for a, da in zip("xyz", d):
+                r = raw(ch.pop(f"{t}{k}{a}")) + da
+                inp[f"l{a}"] = np.clip((r * 127 + (1 << 13)) >> 14, -127, 127)
+            inp["h"] = np.full(len(r), 255)
+            key = lane_key(t, k)
+            x = np.clip(np.rint(fenney.dot_float(inp, **self.params))
+                        + bound.get("offset", {}).get(key, 0), 0, 1023)
+            ch[key] = (x.astype(np.int64) << 4) * VALUE.lsb
+        return ch

@@ -1,0 +1,52 @@
+"""The phong stage (seed 000 eq 33-45, Duff): the interpolated normal (three linear channels)
+normalised at every pixel and dotted with each L and H: the quality reference in hardware."""
+import numpy as np
+
+from golden import shade
+from hdl.fixed import Field
+from hdl.setup_unit.formats import VALUE
+from hdl.shade_unit.phong import Phong as Unit, phong_lanes
+
+from ..stage import Stage
+from .texture import raw
+
+
+class Phong(Stage):
+    name = "phong"
+    channels = tuple((f"n{a}", "linear", 0) for a in "xyz")
+    why = "shading.method = phong"
+
+    @classmethod
+    def wanted(cls, q):
+        return q["method"] == "phong"
+
+    @property
+    def params(self):
+        q = self.q
+        return dict(lights=q["lights"], specular=q["specular"], rsqrt_iters=q["rsqrt_iters"])
+
+    @property
+    def uniforms(self):
+        return [Field(f.name, VALUE) for f in Unit.spec(**self.params).inputs[3:]]   # L, H
+
+    def validate(self, q):
+        if q["bump"] != "none":
+            raise ValueError(f"shading.method: phong interpolates the normal, which "
+                             f"bump.method = {q['bump']} replaces; use none of them together")
+
+    @property
+    def latency(self):
+        return Unit.spec(**self.params).latency
+
+    def rtl(self, p, v, uni):
+        unit = Unit.spec(**self.params)
+        return phong_lanes(p, {**v, **{f.name: uni[f.name] for f in self.uniforms}},
+                           unit.vectors(), self.q["rsqrt_iters"])
+
+    def model(self, prep, frag, ch, bound):
+        ch = dict(ch)
+        inp = {k: raw(ch.pop(k)) for k in ("nx", "ny", "nz")}
+        inp.update({f.name: np.full(len(inp["nx"]), prep["uniforms"][f.name])
+                    for f in self.uniforms})
+        out, _ = shade.phong(inp, lights=self.q["lights"], specular=self.q["specular"])
+        return {**ch, **{k: x * VALUE.lsb for k, x in out.items()}}

@@ -1,0 +1,72 @@
+"""The raster stage (seeds 000-002): triangles in, fragments out, with the channels the later
+stages read and their flat words. Its unit is ``hdl.span_unit.Raster``; the composed top
+instantiates it and names its outputs for the stages after it (``rename``)."""
+import numpy as np
+
+from golden import raster as raster_model
+from hdl.setup_unit.formats import MODES
+from hdl.shade_unit.formats import light_fields
+from hdl.span_unit import Raster as RasterUnit
+
+from ..stage import Stage
+
+
+class Raster(Stage):
+    name = "raster"
+
+    @classmethod
+    def wanted(cls, q):
+        return True
+
+    @property
+    def channels(self):
+        """Its own: depth, and the shading method's N.L and N.H per light where no bump
+        method and no per-pixel normal computes them (seed 001)."""
+        q = self.q
+        own = [("depth", "linear", 0)]
+        if q["bump"] == "none" and q["method"] in MODES:
+            own += [(f.name, q["method"], 0) for f in light_fields(q["lights"], q["specular"],
+                                                                    "d", "s")]
+        return own
+
+    def join(self, channels, flat):
+        """The channels of every stage (``(name, mode, group)``, this one's first) and their
+        flat words: the raster's parameters."""
+        q = self.q
+        self.all_channels, self.flat_names = channels, flat
+        self.params = dict(screen_bits=q["screen_bits"], sub_bits=q["sub_bits"],
+                           channels=len(channels), modes=",".join(m for _, m, _ in channels),
+                           recip=q["recip"], recip_iters=q["recip_iters"])
+        if any(g for _, _, g in channels):
+            self.params["groups"] = ",".join(str(g) for _, _, g in channels)
+        if flat:
+            self.params["flat"] = len(flat)
+        names = [n for n, _, _ in channels]
+        self.why = (f"shading.method = {q['method']}" if q["bump"] == "none" else
+                    f"bump.method = {q['bump']}") + f": channels {', '.join(names)}" + \
+            (f"; {len(flat)} flat word(s)" if flat else "")
+        return self
+
+    @property
+    def unit(self):
+        return RasterUnit.spec(**self.params)
+
+    @property
+    def latency(self):
+        return self.unit.latency
+
+    def rename(self):
+        """The fragment's fields as the stages name them: the pixel's coordinates ride along
+        as ``_pix_x``, ``_pix_y`` (x, y, z are texel_decode's)."""
+        out = {"x": "_pix_x", "y": "_pix_y"}
+        out.update({f"v{k}": name for k, (name, _, _) in enumerate(self.all_channels)})
+        out.update({f"f{k}": name for k, name in enumerate(self.flat_names)})
+        return out
+
+    def model(self, prep, frag=None, ch=None, bound=None):
+        """The raster's float model on the scene: its fragments, and the values by name (the
+        channels, reals; the flat words, integers)."""
+        frag = raster_model.run(prep["inputs"], **self.params)
+        ch = {name: frag[f"v{k}"] for k, (name, _, _) in enumerate(self.all_channels)}
+        ch.update({name: np.asarray(frag[f"f{k}"]) for k, name in enumerate(self.flat_names)})
+        return frag, ch

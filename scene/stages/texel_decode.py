@@ -1,0 +1,29 @@
+"""The texel_decode stage (seed 004, second embodiment): the X/Z codes to the bump vector."""
+from golden import fenney
+from hdl.illum_unit.texel_decode import TexelDecode as Unit
+
+from ..stage import Stage
+
+
+class TexelDecode(Stage):
+    bump = True
+    name = "texel_decode"
+    why = "bump.method = fenney_xz"
+
+    @classmethod
+    def wanted(cls, q):
+        return q["bump"] == "fenney_xz"
+
+    @property
+    def latency(self):
+        return Unit.spec().latency
+
+    def rtl(self, p, v, uni):
+        v["texel_x"], v["texel_z"] = v.pop("_hi"), v.pop("_lo")
+        v = Unit.spec().datapath(p, v)
+        v.pop("invalid")             # decoded by the guard's rule (docs/bump.md)
+        return v
+
+    def model(self, prep, frag, ch, bound):
+        out = fenney.texel_decode(ch.pop("_hi"), ch.pop("_lo"))
+        return {**ch, **{k: out[k] for k in "xyz"}}
