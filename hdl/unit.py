@@ -187,9 +187,14 @@ class Unit(wiring.Component):
             "o": Out(stream.Signature(layout(self.outputs))),
             **{f"u_{f.name}": In(f.fmt.shape) for f in self.uniforms},
             **self.status_ports,
+            **{name: d(stream.Signature(layout(fields)))
+               for name, (d, fields) in self.stream_ports.items()},
         })
 
     status_ports = {}   # extra outputs (a unit that emits many rows per input: busy, counters)
+    # Streams beside ``i`` and ``o``: ``{name: (In or Out, fields)}`` (a memory port: its
+    # requests out, its responses in)
+    stream_ports = {}
     # Uniforms: inputs held for a whole run (a light's direction, a material's colour), the
     # registers a host writes before it streams triangles; ports ``u_<field>``.
     uniforms = ()
@@ -247,6 +252,10 @@ class NamedPorts(wiring.Component):
         if clash:
             raise ValueError(f"{unit.NAME}: status port(s) {sorted(clash)} clash with fields")
         members.update(unit.status_ports)
+        for name, (d, fields) in unit.stream_ports.items():    # name_valid, name_<field>...
+            back = In if d is Out else Out
+            members.update({f"{name}_valid": d(1), f"{name}_ready": back(1)})
+            members.update({f"{name}_{f.name}": d(f.fmt.shape) for f in fields})
         super().__init__(members)
 
     def elaborate(self, platform):
@@ -261,4 +270,13 @@ class NamedPorts(wiring.Component):
         m.d.comb += [getattr(unit, f"u_{f.name}").eq(getattr(self, f"u_{f.name}"))
                      for f in unit.uniforms]
         m.d.comb += [getattr(self, name).eq(getattr(unit, name)) for name in unit.status_ports]
+        for name, (d, fields) in unit.stream_ports.items():
+            port = getattr(unit, name)
+            pins = [(getattr(self, f"{name}_{f.name}"), port.payload[f.name]) for f in fields]
+            pins.append((getattr(self, f"{name}_valid"), port.valid))
+            ready = getattr(self, f"{name}_ready")
+            if d is Out:                   # the unit's requests out, their ready in
+                m.d.comb += [pin.eq(x) for pin, x in pins] + [port.ready.eq(ready)]
+            else:                          # responses in, their ready out
+                m.d.comb += [x.eq(pin) for pin, x in pins] + [ready.eq(port.ready)]
         return m

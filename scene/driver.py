@@ -330,7 +330,9 @@ def prepare(scene):
             uni[f"kd{j}_{c}"] = _raw(mat["diffuse"] * l["color"][ci] * col[ci], COEF)
             uni[f"ks{j}_{c}"] = _raw(mat["specular"] * l["color"][ci], COEF)
     uni = {f.name: int(uni[f.name]) for f in spec.uniforms}
+    image = [s.image for s in spec.stages if hasattr(s, "image")]
     return {"scene": scene, "params": pipe, "pipeline": spec, "inputs": inputs,
+            "memory": image[0]({"bump": bump}) if image else None,
             "uniforms": uni, "size": (W, H),
             "triangles": {"in": len(tris), "culled": int((~keep).sum()), "drawn": len(drawn)},
             "float": {"sx": sx[drawn], "sy": sy[drawn], "inv_z": zmin / zc[drawn],

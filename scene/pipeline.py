@@ -16,7 +16,7 @@ sets before it streams triangles. The depth test and the framebuffer are not her
 external memory (a 256 x 256 frame with depth is 2.6 Mbit, more than the 1 Mbit of block RAM
 of an ECP5-25F), and the renderer keeps them.
 """
-from amaranth.hdl import Module
+from amaranth.hdl import Cat, Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
@@ -57,18 +57,23 @@ class ScenePipeline(Unit):
               "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
               "bump": "none", "bump_map": "bricks", "bump_size": 256, "bump_depth": 1.0,
               "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
-              "rsqrt_bits": 12}
+              "rsqrt_bits": 12,
+              # the texel cache (per bank: lines, texels a line, ways) and its queue
+              "cache_lines": 64, "cache_line": 4, "cache_ways": 2, "tex_queue": 64}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
               "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
               "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "rsqrt_iters": (1, 3), "bump": BUMPS, "bump_map": None,
               "bump_size": (16, MAX_TEXTURE), "bump_depth": (0.0, 1e9), "filter": FILTERS,
               "trig_bits": (4, 16), "rotation": ("paper", "exact"),
-              "rsqrt_bits": DotUnit.RANGES["rsqrt_bits"]}
-    status_ports = {"busy": Out(1), "culled": Out(32)}
-
+              "rsqrt_bits": DotUnit.RANGES["rsqrt_bits"], "cache_lines": (2, 1024),
+              "cache_line": (1, 64), "cache_ways": (1, 8), "tex_queue": (4, 512)}
     def validate(self, **q):
         self.stages = choose(q)
+        self.stream_ports = {name: port for s in self.stages for name, port in s.ports.items()}
+        # held: a bit per stage (the raster's first), set while it holds data; a hang's
+        # message names the stages that held it
+        self.status_ports = {"busy": Out(1), "culled": Out(32), "held": Out(len(self.stages))}
 
     @property
     def raster(self):
@@ -118,6 +123,7 @@ class ScenePipeline(Unit):
         m.submodules.raster = raster = RasterUnit(**self.raster.params)
         wiring.connect(m, wiring.flipped(self.i), raster.i)
         last, rename, busy = raster.o, self.raster.rename(), raster.busy
+        held = [raster.busy]
         rest = self.stages[1:]
         for k, stage in enumerate(rest):          # the last gives the fragment's fields
             out = self.outputs if stage is rest[-1] else None
@@ -126,11 +132,14 @@ class ScenePipeline(Unit):
             wiring.connect(m, last, unit.i)
             m.d.comb += [getattr(unit, f"u_{f.name}").eq(getattr(self, f"u_{f.name}"))
                          for f in stage.uniforms]
-            for valid in unit.valids:
-                busy = busy | valid
+            for name in stage.ports:                    # the memory port, the top's own
+                wiring.connect(m, wiring.flipped(getattr(self, name)), getattr(unit, name))
+            busy = busy | unit.busy
+            held.append(unit.busy)
             last, rename = unit.o, None
         wiring.connect(m, last, wiring.flipped(self.o))
-        m.d.comb += [self.busy.eq(busy), self.culled.eq(raster.culled)]
+        m.d.comb += [self.busy.eq(busy), self.culled.eq(raster.culled),
+                     self.held.eq(Cat(*held))]
         return m
 
 

@@ -11,7 +11,9 @@ A stage subclasses :class:`Stage` and supplies
 - ``validate(q)``: its checks on the scene, raising ``ValueError`` that names the scene key;
 - ``latency``: its register stages, from its units;
 - ``rtl(p, v, uni)``: its stages on the :class:`hdl.unit.Pipeline` ``p``, from the values
-  ``v`` of the stage before it (named as the stages name them); returns the values after it;
+  ``v`` of the stage before it (named as the stages name them); returns the values after it.
+  A stage whose latency varies (a memory read) has ``build`` instead, with handshakes of its
+  own, and ``ports``: the streams it adds to the top (its memory port);
 - ``model(prep, frag, ch, bound)``: the same step in the float or integer model, on numpy
   arrays per fragment; ``bound``: the tests' offsets, each stage takes the ones it knows.
 
@@ -19,10 +21,11 @@ A stage subclasses :class:`Stage` and supplies
 joins stages with ``wiring.connect``. Inside a stage the units share one enable (the
 :class:`hdl.unit.Pipeline`), which is cheap; between stages the handshake is the stream's.
 """
-from amaranth.hdl import Module, Shape, Signal, Value
+from amaranth.hdl import Const, Module, Shape, Signal, Value
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from hdl.fixed import layout
 from hdl.unit import Pipeline
 
 __all__ = ["Stage", "StageUnit", "Link", "lanes", "lane_key"]
@@ -51,8 +54,25 @@ class Stage:
     def latency(self):
         raise NotImplementedError
 
+    ports = {}             # name: (In or Out, fields): streams of the stage's own
+
     def rtl(self, p, v, uni):
         raise NotImplementedError
+
+    def build(self, m, i, o, v, uni, ports):
+        """The stage's logic between the handshakes ``i`` and ``o`` (``Link``s); returns
+        ``(values, busy)``. By default its ``rtl`` on one shared-enable pipeline, whose
+        stages must be its ``latency``."""
+        p = Pipeline(m, i, o)
+        v = self.rtl(p, v, uni)
+        if p.stages != self.latency:
+            raise AssertionError(f"stage {self.name} has {p.stages} stages, its latency says "
+                                 f"{self.latency}")
+        m.d.comb += o.valid.eq(p.valid)
+        busy = Const(0)
+        for valid in p.valids:
+            busy = busy | valid
+        return v, busy
 
     def model(self, prep, frag, ch, bound):
         raise NotImplementedError
@@ -76,7 +96,7 @@ class StageUnit(wiring.Component):
     values the stage gives; where it is the last one, ``out_fields`` in their order, each
     from the value ``source`` names), and a port ``u_<name>`` per uniform. The datapath is
     built here, so the output layout is known; ``elaborate`` joins it to the ports.
-    ``valids``: every stage register's valid bit."""
+    ``busy``: data in the stage."""
 
     def __init__(self, stage, layout_in, out_fields=None, rename=None, source=None):
         self.stage = stage
@@ -84,12 +104,12 @@ class StageUnit(wiring.Component):
         self._in = {name: Signal(f.shape, name=f"i_{name}") for name, f in layout_in}
         self._uni = {f.name: Signal(f.fmt.shape, name=f"u_{f.name}") for f in stage.uniforms}
         self._li, self._lo = Link(), Link()
-        p = Pipeline(m, self._li, self._lo)
-        v = stage.rtl(p, {(rename or {}).get(k, k): x for k, x in self._in.items()}, self._uni)
-        if p.stages != stage.latency:
-            raise AssertionError(f"stage {stage.name} has {p.stages} stages, its latency says "
-                                 f"{stage.latency}")
-        self._valid, self.valids = p.valid, p.valids
+        self._ports = {name: (stream.Signature(layout(fields)) if d is Out else
+                              stream.Signature(layout(fields)).flip()).create(path=(name,))
+                       for name, (d, fields) in stage.ports.items()}
+        v, self.busy = stage.build(m, self._li, self._lo,
+                                   {(rename or {}).get(k, k): x for k, x in self._in.items()},
+                                   self._uni, self._ports)
         if out_fields is not None:
             source = source or {}
             v = {f.name: Value.cast(v[source.get(f.name, f.name)]) for f in out_fields}
@@ -99,13 +119,16 @@ class StageUnit(wiring.Component):
         layout_out = data.StructLayout({k: Shape.cast(x.shape()) for k, x in self._out.items()})
         super().__init__({"i": In(stream.Signature(layout_in)),
                           "o": Out(stream.Signature(layout_out)),
-                          **{f"u_{k}": In(s.shape()) for k, s in self._uni.items()}})
+                          **{f"u_{k}": In(s.shape()) for k, s in self._uni.items()},
+                          **{name: d(stream.Signature(layout(fields)))
+                             for name, (d, fields) in stage.ports.items()}})
 
     def elaborate(self, platform):
         m = self._m
         m.d.comb += [self._li.valid.eq(self.i.valid), self.i.ready.eq(self._li.ready),
-                     self._lo.valid.eq(self._valid), self.o.valid.eq(self._valid),
-                     self._lo.ready.eq(self.o.ready)]
+                     self.o.valid.eq(self._lo.valid), self._lo.ready.eq(self.o.ready)]
+        for name, inner in self._ports.items():
+            wiring.connect(m, wiring.flipped(getattr(self, name)), inner)
         m.d.comb += [s.eq(self.i.payload[k]) for k, s in self._in.items()]
         m.d.comb += [self.o.payload[k].eq(x) for k, x in self._out.items()]
         m.d.comb += [s.eq(getattr(self, f"u_{k}")) for k, s in self._uni.items()]

@@ -16,7 +16,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge
 
 from sim.progress import report_to
-from sim.stream import Traffic
+from sim.stream import Memory, Traffic
 
 
 @cocotb.test()
@@ -31,6 +31,11 @@ async def stream_vectors(dut):
                       seed=spec["seed"], many=spec["many"],
                       progress=report_to(os.environ["SHADE_PROGRESS"]))
     busy = dut.busy if spec["many"] else None
+    mem = None
+    if "memory" in spec:                             # the texture memory behind the port
+        with np.load(os.environ["SHADE_MEM"]) as z:
+            mem = Memory(z["words"], **spec["memory"])
+        dut.tex_req_ready.value = dut.tex_resp_valid.value = 0
     in_ports = [getattr(dut, f"i_{f['name']}") for f in fin]
     out_ports = [getattr(dut, f"o_{f['name']}") for f in fout]
     Clock(dut.clk, 10, unit="ns").start()
@@ -56,10 +61,19 @@ async def stream_vectors(dut):
             for port, value in zip(in_ports, rows[row]):
                 port.value = value
         o_ready.value = ready
+        if mem:
+            take, rv, rd = mem.drive()
+            dut.tex_req_ready.value, dut.tex_resp_valid.value = int(take), int(rv)
+            dut.tex_resp_data.value = rd
         await ReadOnly()
         ov = int(o_valid.value)
         got = tuple(int(p.value) for p in out_ports) if ov and ready else 0
-        traffic.edge(int(i_ready.value), ov, got, int(busy.value) if busy is not None else None)
+        b = int(busy.value) if busy is not None else None
+        if mem:
+            mem.edge(traffic.cycles, int(dut.tex_req_valid.value), int(dut.tex_req_addr.value),
+                     int(dut.tex_resp_ready.value))
+            b = b or mem.busy
+        traffic.edge(int(i_ready.value), ov, got, b)
     out = {}
     for k, f in enumerate(fout):
         col = np.array([row[k] for row in traffic.out], dtype=np.int64)
@@ -67,5 +81,7 @@ async def stream_vectors(dut):
             col = np.where(col >> (f["width"] - 1) & 1, col - (1 << f["width"]), col)
         out[f["name"]] = col
     status = {"culled": int(dut.culled.value)} if spec["many"] else {}
+    if mem:
+        status["memory_reads"] = mem.reads
     np.savez(os.environ["SHADE_OUT"], latency=traffic.latency if traffic.latency is not None
              else -1, cycles=traffic.cycles, **status, **out)

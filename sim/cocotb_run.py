@@ -95,11 +95,12 @@ def _log_tail(path):
 
 
 def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=0,
-               waves=None, progress=None, uniforms=None):
+               waves=None, progress=None, uniforms=None, memory=None):
     """Run every row of ``inputs`` through the Verilog of unit ``name``.
 
     ``waves``: a path without suffix; the simulator's trace (FST from Icarus, VCD from
     Verilator) is moved there. ``progress``: called as ``progress(sent, outputs)``.
+    ``memory``: the texture memory behind a memory port (:class:`sim.stream.Memory`).
     Returns ``(outputs, info)`` with ``info = {"latency", "cycles", "waves"}``.
     """
     runner, build_dir = build(name, params, simulator, waves=bool(waves))
@@ -109,12 +110,18 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
             "p_valid": p_valid, "p_ready": p_ready, "seed": seed,
             "many": bool(unit.status_ports),
             "uniforms": [{**f.describe(), "value": int(uniforms[f.name])} for f in unit.uniforms]}
+    if memory is not None:
+        spec["memory"] = {"line": memory.line, "latency": memory.latency,
+                          "p_ready": memory.p_ready, "seed": seed}
     with tempfile.TemporaryDirectory(dir=build_dir.parent) as tmp:
         tmp = Path(tmp)
         (tmp / "spec.json").write_text(json.dumps(spec))
         np.savez(tmp / "in.npz", **{f["name"]: np.asarray(inputs[f["name"]], np.int64)
                                     for f in spec["inputs"]})
+        if memory is not None:
+            np.savez(tmp / "mem.npz", words=memory.words)
         env = {"SHADE_SPEC": str(tmp / "spec.json"), "SHADE_IN": str(tmp / "in.npz"),
+               "SHADE_MEM": str(tmp / "mem.npz"),
                "SHADE_OUT": str(tmp / "out.npz"), "SHADE_PROGRESS": str(tmp / "progress"),
                "PYTHONPATH": _env(simulator)["PYTHONPATH"]}
         with _environ(_env(simulator)), watch(tmp / "progress", progress or (lambda *_: None)):
@@ -140,6 +147,7 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
                 wave.parent.mkdir(parents=True, exist_ok=True)
                 shutil.move(found[0], wave)
     info = {"latency": int(got.pop("latency")), "cycles": int(got.pop("cycles")), "waves": wave}
-    if "culled" in got:
-        info["culled"] = int(got.pop("culled"))
+    for k in ("culled", "memory_reads"):
+        if k in got:
+            info[k] = int(got.pop(k))
     return got, info

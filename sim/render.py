@@ -16,6 +16,7 @@ from scene import driver as S
 
 from hdl.units import make_unit
 
+from .stream import Memory
 from .verilog import BUILD, SCENES
 
 __all__ = ["render", "compare", "flip", "gallery"]
@@ -68,10 +69,12 @@ def flip(test, ref, cov):
 
 
 def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=False,
-           hardware=None):
+           hardware=None, mem_latency=12, mem_ready=1.0):
     """Render a scene; writes the five files of scenes.md and returns the metrics.
     ``hardware``: pipeline parameters that are not scene keys (``make tradeoffs``'s knobs:
-    the reciprocal, the power table's bits, fenney_dot's renormalisation)."""
+    the reciprocal, the power table's bits, fenney_dot's renormalisation). ``mem_latency``,
+    ``mem_ready``: the texture memory's latency and the chance each clock that it takes a
+    request and offers a response (``sim.stream.Memory``)."""
     from .simulators import simulate
     scene = S.load(scene_path)
     if size:
@@ -91,9 +94,11 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
         from .cocotb_run import build
         build("scene", params, simulator)
     t0 = time.time()
+    memory = None if prep["memory"] is None else \
+        Memory(prep["memory"], latency=mem_latency, p_ready=mem_ready)
     frags, info = simulate("scene", params, prep["inputs"], simulator,
-                           uniforms=prep["uniforms"], progress=None if quiet else
-                           f"scene {scene['name']}")
+                           uniforms=prep["uniforms"], memory=memory,
+                           progress=None if quiet else f"scene {scene['name']}")
     wall = time.time() - t0
     rgb = np.stack([frags[c] for c in "rgb"], -1).astype(np.uint8)
     rtl, cov = S.framebuffer(prep["size"], frags["x"], frags["y"], frags["depth"], rgb,
@@ -119,6 +124,12 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
                "bump": scene["bump"]["method"], "simulator": simulator,
                "size": list(prep["size"]), "triangles": prep["triangles"],
                "fragments": n, "fragments_model": n_model, "cycles": info["cycles"],
+               "fragments_per_clock": round(n / info["cycles"], 4) if info["cycles"] else None,
+               **({"memory": {"latency": mem_latency, "ready": mem_ready,
+                              "words_read": info.get("memory_reads"),
+                              "words_per_fragment": round(info["memory_reads"] / n, 4)
+                              if n and info.get("memory_reads") is not None else None}}
+                  if memory is not None else {}),
                "latency": info["latency"], "rtl_wall_s": round(wall, 3),
                "sim_px_per_s": round(n / wall, 1) if wall > 0 else None,
                "pipeline": {"params": params, "latency": pipe.latency,

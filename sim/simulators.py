@@ -34,14 +34,15 @@ def available(simulator):
 
 
 def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=0,
-             waves=None, window=None, progress=False, uniforms=None):
+             waves=None, window=None, progress=False, uniforms=None, memory=None):
     """Run inputs through the RTL on any simulator (``sim.simulators``); returns
     ``(outputs, info)``.
 
     ``waves``: a path without suffix for the trace (FST from Icarus, VCD from the others); ``window``: (first, last) cycles to trace, on the
     batch path. With ``progress``, a progress bar on stderr (``progress`` a string: its label).
     ``uniforms``: the values of the unit's uniform ports (a scene pipeline's lights and
-    colours), held for the run."""
+    colours), held for the run. ``memory``: the texture memory behind its memory port
+    (:class:`sim.stream.Memory`; its line is set from the unit's cache)."""
     from .cli_common import UsageError, rows
     reason = available(simulator)
     if reason:
@@ -60,7 +61,10 @@ def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=
         label = progress if isinstance(progress, str) else name
         bar = Progress(f"{label} on {simulator}", rows(inputs), many,
                        "tri" if many else "row")
-    traffic = dict(p_valid=p_valid, p_ready=p_ready, seed=seed, uniforms=uniforms)
+    if memory is not None and "tex_req" in unit.stream_ports:
+        memory = memory.with_line(unit.params["cache_line"])
+    traffic = dict(p_valid=p_valid, p_ready=p_ready, seed=seed, uniforms=uniforms,
+                   memory=memory)
     try:
         if simulator == "amaranth":
             from .amaranth_run import run_amaranth

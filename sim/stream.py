@@ -9,7 +9,7 @@ import random
 
 import numpy as np
 
-__all__ = ["pack", "unpack", "Traffic", "StreamError"]
+__all__ = ["pack", "unpack", "Traffic", "StreamError", "Memory"]
 
 
 class StreamError(RuntimeError):
@@ -110,3 +110,62 @@ class Traffic:
     def latency(self):
         """Cycles from the first accepted input to the first output (ready held high)."""
         return None if self.first_out is None else self.first_out - self.first_in
+
+
+class Memory:
+    """The texture memory behind a memory port, as every harness models it: ``words`` (the
+    image), ``line`` responses per request (a line's texels in order), ``latency`` clocks from
+    a request's acceptance to its first response, and random stalls: each clock it takes a
+    request, and offers the next response, with chance ``p_ready``. Requests are answered in
+    order. ``reads``: the words read. The Python harnesses step it (``drive``, ``edge``);
+    the batch harness has the same model in C++."""
+
+    def __init__(self, words, line=1, latency=12, p_ready=1.0, seed=0):
+        if latency < 1 or not 0 < p_ready <= 1:
+            raise ValueError(f"memory latency must be >= 1 and p_ready in (0, 1], not "
+                             f"{latency}, {p_ready}")
+        self.words = np.asarray(words, np.int64)
+        self.line, self.latency, self.p_ready = int(line), int(latency), float(p_ready)
+        self.rng = random.Random(seed ^ 0x5eed)
+        self.bursts = []                # [due cycle, address, next word]
+        self.resp_valid, self.resp_data, self.take, self.reads = False, 0, False, 0
+        self.held = None
+
+    def with_line(self, line):
+        """The same memory, answering ``line`` words per request (the cache's line)."""
+        self.line = int(line)
+        return self
+
+    def drive(self):
+        """``(request ready, response valid, response data)`` to set before a clock edge."""
+        self.take = self.p_ready >= 1 or self.rng.random() < self.p_ready
+        return self.take, self.resp_valid, self.resp_data
+
+    def edge(self, cycle, req_valid, req_addr, resp_ready):
+        """What was sampled at the edge of ``cycle``: the request, the response's ready."""
+        if self.held is not None and (not req_valid or req_addr != self.held):
+            raise StreamError(f"a stalled memory request changed or was withdrawn before it "
+                              f"was taken (cycle {cycle})")
+        self.held = req_addr if req_valid and not self.take else None
+        moved = False
+        if req_valid and self.take:
+            if req_addr % self.line or req_addr + self.line > len(self.words):
+                raise StreamError(f"a memory request at {req_addr} outside the texture memory "
+                                  f"or not aligned to a line (cycle {cycle})")
+            self.bursts.append([cycle + self.latency, req_addr, 0])
+            moved = True
+        if self.resp_valid and resp_ready:
+            self.resp_valid, moved = False, True
+        if not self.resp_valid and self.bursts and self.bursts[0][0] <= cycle + 1 and \
+                (self.p_ready >= 1 or self.rng.random() < self.p_ready):
+            b = self.bursts[0]
+            self.resp_data, self.resp_valid = int(self.words[b[1] + b[2]]), True
+            self.reads += 1
+            b[2] += 1
+            if b[2] == self.line:
+                self.bursts.pop(0)
+        return moved
+
+    @property
+    def busy(self):
+        return self.resp_valid or bool(self.bursts)

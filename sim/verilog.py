@@ -69,6 +69,17 @@ def field_map(unit):
     for name in unit.status_ports:
         ports.append({"port": name, "direction": "output", "width": len(getattr(unit, name)),
                       "role": STATUS_ROLES.get(name, "status")})
+    for name, (d, fields) in unit.stream_ports.items():
+        out = "output" if d.name == "Out" else "input"
+        back = "input" if out == "output" else "output"
+        role = STREAM_ROLES.get(name, "stream")
+        ports.append({"port": f"{name}_valid", "direction": out, "width": 1,
+                      "role": f"{role}: the fields below are valid"})
+        ports.append({"port": f"{name}_ready", "direction": back, "width": 1,
+                      "role": f"{role}: a transfer happens when valid and ready are high"})
+        ports += [{"port": f"{name}_{f.name}", "direction": out, "field": f.name,
+                   **f.fmt.describe(), "value": _meaning(f.fmt), "role": role}
+                  for f in fields]
     return {"module": unit.NAME, "params": dict(unit.params), "latency": unit.latency,
             "one_row_per_clock": True, "ports": ports}
 
@@ -79,7 +90,13 @@ def _meaning(fmt):
 
 
 STATUS_ROLES = {"busy": "work in flight (inputs accepted whose outputs have not all left)",
-                "culled": "count of degenerate triangles dropped since reset"}
+                "culled": "count of degenerate triangles dropped since reset",
+                "held": "a bit per stage, the raster's lowest: the stage holds data"}
+
+
+STREAM_ROLES = {
+    "tex_req": "texture memory requests: a line's first texel address (docs/texture.md)",
+    "tex_resp": "texture memory responses: a line's texels in order, the requests' order"}
 
 
 def _write(path, text):

@@ -1,4 +1,8 @@
-"""The bump map in hardware: a texture ROM addressed by the raster's texture coordinates."""
-from .texture import FILTERS, MAX_TEXTURE, fetch, fetch_latency, texture_lut, weight_bits
+"""The bump map in hardware: texel fetch through a texel cache and the texture memory port."""
+from .cache import ADDR, CACHE_LATENCY, request_fields, response_fields, texel_cache
+from .texture import (FILTERS, MAX_TEXTURE, address_stages, banks, filter_stages, filtered,
+                      lines, memory_image, weight_bits)
 
-__all__ = ["FILTERS", "MAX_TEXTURE", "fetch", "fetch_latency", "texture_lut", "weight_bits"]
+__all__ = ["ADDR", "CACHE_LATENCY", "FILTERS", "MAX_TEXTURE", "address_stages", "banks",
+           "filter_stages", "filtered", "lines", "memory_image", "request_fields",
+           "response_fields", "texel_cache", "weight_bits"]

@@ -1,18 +1,22 @@
-"""Texel fetch: a bump map's texels in ROM, addressed by texture coordinates that the raster
-interpolates (linear channels, ``VALUE``: tiles, 14 fraction bits), wrapping at every tile.
+"""Texel fetch: a bump map's texels in the texture memory, read through the texel cache
+(``cache.py``) at texture coordinates that the raster interpolates (linear channels,
+``VALUE``: tiles, 14 fraction bits), wrapping at every tile.
 
 - A texel is two codes of ``bits`` bits each, ``hi`` above ``lo``: S and R for fenney_polar,
-  TexelX and TexelZ for fenney_xz (8 bits each), theta and phi for angular (angle bits). The map is ``2**b`` texels a side, row t
-  after row t - 1, each row along s.
+  TexelX and TexelZ for fenney_xz (8 bits each), theta and phi for angular (12 bits each): 16
+  or 24 bits. The map is ``2**b`` texels a side.
+- **Memory layout** (``memory_image``), texel addresses from 0 (the map's base):
+  - nearest: one bank, row t after row t - 1, each row along s: ``t * size + s``;
+  - bilinear: four banks, bank ``k = 2 (t & 1) + (s & 1)`` at ``k * (size / 2)**2``, each a
+    quarter map, row ``t >> 1`` after row ``(t >> 1) - 1``: ``k (size/2)**2 + (t >> 1)
+    (size / 2) + (s >> 1)``. A 2 x 2 footprint has one texel in each bank.
 - ``nearest``: the texel holding the coordinate, its index the top ``b`` fraction bits.
 - ``bilinear`` (each code filtered on its own, as the patent's texels are; defined here in
-  integers, and ``golden.bump.bilinear`` is the same definition in numpy):
+  integers, and ``golden.bump.fetch`` is the same definition in numpy):
   - u = c - half a texel; texels i0 = floor(u), i1 = i0 + 1 (wrapping), weight f the next
     ``F = weight_bits(b)`` bits of u, likewise along t;
   - each row: a = code(i0) 2**F + (code(i1) - code(i0)) f_s; then
     r = a(j0) 2**F + (a(j1) - a(j0)) f_t; the code is (r + 2**(2F-1)) >> 2F;
-  - the 2 x 2 texels come from four ROM banks by the parities of s and t, one texel from
-    each, so a fragment a clock needs no more ports than one read each;
   - three multipliers per code (two rows, one column), each alone in its stage.
   A filtered X/Z texel can leave the valid diamond |X| + |Z| <= 255: texel_decode's guard
   meets it downstream.
@@ -20,12 +24,13 @@ interpolates (linear channels, ``VALUE``: tiles, 14 fraction bits), wrapping at 
 import numpy as np
 from amaranth.hdl import Cat, Mux
 
-from ..fixed import u
-from ..lut import build_lut, rom
 from ..setup_unit.formats import VALUE
 
+__all__ = ["FILTERS", "MAX_TEXTURE", "banks", "memory_image", "lines", "filtered",
+           "address_stages", "filter_stages", "weight_bits"]
+
 FILTERS = ("nearest", "bilinear")
-MAX_TEXTURE = 1024            # texels a side (20 address bits)
+MAX_TEXTURE = 1024            # texels a side (20 address bits; ADDR has 24)
 CODES = ("hi", "lo")
 
 
@@ -35,35 +40,36 @@ def weight_bits(b):
     return min(6, VALUE.frac_bits - b)
 
 
-def texture_lut(texels, bits=8, bank=None):
-    """A texture ROM: ``texels`` (size x size, row t, column s), each ``hi << bits | lo``, as
-    data (the scene's encoder makes them); ``bank`` (a, b): only the texels whose s and t have
-    those parities."""
-    texels = np.asarray(texels, np.int64)
-    if bank is not None:
-        texels = texels[bank[1]::2, bank[0]::2]
-    texels = texels.ravel()
-    return build_lut(lambda a: texels[a.astype(int)], (len(texels) - 1).bit_length(),
-                     u(2 * bits))
+def banks(filter):
+    return 1 if filter == "nearest" else 4
 
 
-def fetch_latency(filter):
-    """:func:`fetch`'s stages: nearest 2 (the ROM's read register, its output registered),
-    bilinear 7."""
-    return 2 if filter == "nearest" else 7
+def memory_image(hi, lo, bits, filter):
+    """The map's texels (``hi``, ``lo``: size x size codes, row t, column s) as the texture
+    memory holds them (the layout above): one word per texel, ``hi << bits | lo``."""
+    words = (np.asarray(hi, np.int64) << bits) | np.asarray(lo, np.int64)
+    if filter == "nearest":
+        return words.ravel()
+    return np.concatenate([words[c::2, a::2].ravel() for c in (0, 1) for a in (0, 1)])
 
 
-def fetch(p, v, s, t, texels, filter, bits=8):
-    """Texel codes at the coordinates ``s``, ``t`` (keys, consumed): ``_hi`` and ``_lo``, in
-    ``fetch_latency(filter)`` stages. ``texels``: the map (see :func:`texture_lut`)."""
-    b = len(texels).bit_length() - 1
+def address_stages(filter):
+    return 1 if filter == "nearest" else 2
+
+
+def filter_stages(filter):
+    return 1 if filter == "nearest" else 5
+
+
+def lines(p, v, s, t, size, filter, line):
+    """Each bank's line number ``_ln<k>`` and the texel's place in it ``_off<k>`` at the
+    coordinates ``s``, ``t`` (keys, consumed), in ``address_stages(filter)`` stages; with
+    bilinear, the weights ``_fs``, ``_ft`` and the footprint's parities ``_ps``, ``_pt``."""
+    b, lb = size.bit_length() - 1, line.bit_length() - 1
     top = VALUE.frac_bits
     if filter == "nearest":
-        addr = Cat(v.pop(s)[top - b:top], v.pop(t)[top - b:top])
-        lut = texture_lut(texels, bits)
-        v = p.stage(p.stage(v, _texel=rom(lut, addr, "texels")))
-        texel = v.pop("_texel")
-        return {**v, "_hi": texel[bits:2 * bits], "_lo": texel[:bits]}
+        si, ti = v.pop(s)[top - b:top], v.pop(t)[top - b:top]
+        return p.stage(v, _ln0=Cat(si[lb:], ti), _off0=si[:lb])
     F = weight_bits(b)
     half = 1 << (top - b - 1)
     new = {}
@@ -73,27 +79,37 @@ def fetch(p, v, s, t, texels, filter, bits=8):
         new.update({f"_{axis}0": i0, f"_{axis}1": (i0 + 1)[:b],
                     f"_f{axis}": c[top - b - F:top - b]})
     v = p.stage(v, **new)
-    # bank (a, c) holds the texels of s parity a and t parity c: one of the four each
-    reads = {}
-    for a in (0, 1):
-        sa = Mux(v["_s0"][0] == a, v["_s0"], v["_s1"])
-        for c in (0, 1):
-            tc = Mux(v["_t0"][0] == c, v["_t0"], v["_t1"])
-            lut = texture_lut(texels, bank=(a, c))
-            reads[f"_b{a}{c}"] = rom(lut, Cat(sa[1:], tc[1:]), f"bank{a}{c}")
-    par = {"_ps": v.pop("_s0")[0], "_pt": v.pop("_t0")[0]}
+    # bank 2c + a holds the texels of s parity a and t parity c: one of the four each
+    new = {}
+    for c in (0, 1):
+        tc = Mux(v["_t0"][0] == c, v["_t0"], v["_t1"])[1:]
+        for a in (0, 1):
+            sa = Mux(v["_s0"][0] == a, v["_s0"], v["_s1"])[1:]
+            new[f"_ln{2 * c + a}"] = Cat(sa[lb:], tc)
+            new[f"_off{2 * c + a}"] = sa[:lb]
+    new.update(_ps=v.pop("_s0")[0], _pt=v.pop("_t0")[0])
     v.pop("_s1"), v.pop("_t1")
-    v = p.stage(v, **reads, **par)
-    v = p.stage(v)                                          # the banks' outputs
+    return p.stage(v, **new)
+
+
+def filtered(p, v, filter, bits, size):
+    """The codes ``_hi`` and ``_lo`` from the banks' texels ``_tex<k>`` (the cache's output
+    register), in ``filter_stages(filter)`` stages."""
+    if filter == "nearest":
+        v = p.stage(v)                               # the data array's output registered
+        texel = v.pop("_tex0")
+        return {**v, "_hi": texel[bits:2 * bits], "_lo": texel[:bits]}
+    F = weight_bits(size.bit_length() - 1)
+    v = p.stage(v)                                   # the banks' outputs registered
     ps, pt = v.pop("_ps"), v.pop("_pt")
-    bank = {(a, c): v.pop(f"_b{a}{c}") for a in (0, 1) for c in (0, 1)}
+    bank = {(a, c): v.pop(f"_tex{2 * c + a}") for a in (0, 1) for c in (0, 1)}
 
     def texel(di, dj):            # the footprint's texel (i0 + di, j0 + dj): its bank
         sel = lambda a, c: bank[a, c]
         return Mux(ps ^ di, Mux(pt ^ dj, sel(1, 1), sel(1, 0)),
                    Mux(pt ^ dj, sel(0, 1), sel(0, 0)))
     new = {}
-    for k, code in enumerate(CODES):
+    for code in CODES:
         part = lambda x: x[8:16] if code == "hi" else x[:8]
         for dj in (0, 1):
             c0, c1 = part(texel(0, dj)), part(texel(1, dj))

@@ -1,24 +1,25 @@
 """The texture stage: the bump map's texel codes at the raster's texture coordinates (``s``,
-``t``, linear channels), nearest or bilinear; the texels reach the hardware as data, encoded
-here from the scene's map (``golden.bump``)."""
-import functools
-
+``t``, linear channels), nearest or bilinear, read through the texel cache from the texture
+memory port (``tex_req``, ``tex_resp``; ``hdl/texture_unit``). The texels are data: the
+driver encodes them from the scene's map (``golden.bump``) into the memory image, which the
+harness's memory holds; the hardware depends only on the map's size, the filter and the
+cache."""
 import numpy as np
+from amaranth.lib.wiring import In, Out
 
 from golden import bump as bumps
 from hdl.setup_unit.formats import VALUE
-from hdl.texture_unit import MAX_TEXTURE, fetch, fetch_latency
+from hdl.texture_unit import (CACHE_LATENCY, MAX_TEXTURE, address_stages, banks, filter_stages,
+                              filtered, lines, memory_image, request_fields, response_fields,
+                              texel_cache)
+from hdl.unit import Pipeline
 
-from ..stage import Stage
+from ..stage import Link, Stage
 
 ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotation's default)
 
 
-@functools.lru_cache(maxsize=4)
-def texels(kind, bump_map, bump_size, bump_depth, bits):
-    """The texture ROM's words (size x size, ``hi << bits | lo``) of a scene's bump map."""
-    hi, lo, _ = bumps.bump_texels(kind, bump_map, bump_size, bump_depth, bits)
-    return (hi.astype(np.int64) << bits) | lo
+CACHE = ("cache_lines", "cache_line", "cache_ways", "tex_queue")
 
 
 def raw(v):
@@ -46,17 +47,26 @@ class Texture(Stage):
     @property
     def params(self):
         q = self.q
-        out = dict(kind=self.kind, bump_map=q["bump_map"], bump_size=q["bump_size"],
-                   bump_depth=q["bump_depth"], filter=q["filter"])
-        if self.kind == "polar":
-            out["bits"] = ANGLE_BITS
+        out = dict(kind=self.kind, bump_size=q["bump_size"], filter=q["filter"],
+                   bits=self.bits, **{k: q[k] for k in CACHE})
         return out
+
+    @property
+    def ports(self):
+        return {"tex_req": (Out, request_fields()),
+                "tex_resp": (In, response_fields(2 * self.bits))}
 
     @property
     def why(self):
         return f"bump.map = {self.q['bump_map']}: {self.kind} texels, {self.q['filter']}"
 
     def validate(self, q):
+        for k in ("cache_lines", "cache_line", "cache_ways", "tex_queue"):
+            if q[k] & (q[k] - 1):
+                raise ValueError(f"{k}: must be a power of two, not {q[k]}")
+        if q["cache_ways"] > q["cache_lines"]:
+            raise ValueError(f"cache_ways: must be at most cache_lines ({q['cache_lines']}), "
+                             f"not {q['cache_ways']}")
         size = q["bump_size"]
         if size & (size - 1) or size > MAX_TEXTURE:
             raise ValueError(f"bump.size: must be a power of two up to {MAX_TEXTURE} (the "
@@ -68,12 +78,35 @@ class Texture(Stage):
 
     @property
     def latency(self):
-        return fetch_latency(self.q["filter"])
+        """With every texel in the cache and nothing waiting: the address stages, the cache,
+        the filter's stages."""
+        f = self.q["filter"]
+        return address_stages(f) + CACHE_LATENCY + filter_stages(f)
 
-    def rtl(self, p, v, uni):
-        q = self.q
-        words = texels(self.kind, q["bump_map"], q["bump_size"], q["bump_depth"], self.bits)
-        return fetch(p, v, "s", "t", words, q["filter"], self.bits)
+    def build(self, m, i, o, v, uni, ports):
+        """The line addresses (a pipeline), the cache (its own handshakes: its latency
+        varies), the filter (a pipeline)."""
+        q, f = self.q, self.q["filter"]
+        size, n = q["bump_size"], banks(f)
+        a_out, c_out = Link(), Link()
+        p1 = Pipeline(m, i, a_out)
+        v = lines(p1, v, "s", "t", size, f, q["cache_line"])
+        m.d.comb += a_out.valid.eq(p1.valid)
+        v, busy = texel_cache(m, a_out, v, c_out, ports["tex_req"], ports["tex_resp"],
+                              banks=n, lines=q["cache_lines"], line=q["cache_line"],
+                              ways=q["cache_ways"], bank_texels=size * size // n,
+                              texel_bits=2 * self.bits, depth=q["tex_queue"])
+        p2 = Pipeline(m, c_out, o)
+        v = filtered(p2, v, f, self.bits, size)
+        m.d.comb += o.valid.eq(p2.valid)
+        for valid in p1.valids + p2.valids:
+            busy = busy | valid
+        return v, busy
+
+    def image(self, prep):
+        """The texture memory's words (``hdl.texture_unit.memory_image``'s layout)."""
+        hi, lo = prep["bump"]["texels"]
+        return memory_image(hi, lo, self.bits, self.q["filter"])
 
     def model(self, prep, frag, ch, bound):
         """The codes ``_hi``, ``_lo`` (``golden.bump.fetch``: nearest, or the bilinear filter

@@ -73,6 +73,15 @@ def ports_header(unit):
             lines.append(f"    t->{prefix}_{f.name} = ({_ctype(f.fmt.width)})((uint64_t)r[{k}] & "
                          f"{mask:#x}ULL);")
         lines.append("}")
+    mem = "tex_req" in unit.stream_ports
+    lines += [f"#define MEM {int(mem)}", f"#define HELD {int('held' in unit.status_ports)}"]
+    if mem:                    # the texture memory port (sim/batch/harness.cpp's memory)
+        lines += ["static inline void mem_set(Vtop* t, bool take, bool valid, uint64_t data) {",
+                  "    t->tex_req_ready = take;", "    t->tex_resp_valid = valid;",
+                  "    t->tex_resp_data = data;", "}",
+                  "static inline bool mem_req(Vtop* t, uint64_t* addr) {",
+                  "    *addr = t->tex_req_addr;", "    return t->tex_req_valid;", "}",
+                  "static inline bool mem_resp_ready(Vtop* t) { return t->tex_resp_ready; }"]
     lines.append("static inline void get_outputs(Vtop* t, row_t* r) {")
     for k, f in enumerate(fout):
         get = f"(uint64_t)t->o_{f.name}"
@@ -80,6 +89,27 @@ def ports_header(unit):
                                           else f"(row_t){get};"))
     lines.append("}")
     return "\n".join(lines) + "\n"
+
+
+def memory_for(unit, memory):
+    """The memory behind a unit's memory port (none: an empty one for a unit without)."""
+    from ..stream import Memory
+    if "tex_req" in unit.stream_ports and memory is None:
+        raise BatchError(f"{unit.NAME} reads texels through its memory port: give the run a "
+                         f"memory (sim.stream.Memory)")
+    return memory or Memory([])
+
+
+def held_stages(unit, message):
+    """A hang's message with the stages that held data, by name (the ``held`` status bits)."""
+    import re
+    found = re.search(r"held=([0-9a-f]+)", message)
+    if not found or not hasattr(unit, "stages"):
+        return message
+    bits = int(found.group(1), 16)
+    names = [s.name for k, s in enumerate(unit.stages) if bits >> k & 1]
+    return message.replace(found.group(0), "stages holding data: " +
+                           (", ".join(names) or "none"))
 
 
 def build(name, params, *, trace=False):
@@ -122,10 +152,12 @@ def build(name, params, *, trace=False):
 
 
 def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=None,
-              window=None, progress=None, uniforms=None):
+              window=None, progress=None, uniforms=None, memory=None):
     """Every row of ``inputs`` through the unit's Verilated model; ``(outputs, info)`` as the
-    other simulators give them. ``uniforms``: the values of the unit's uniform ports. ``waves``: a path without suffix for a VCD of the cycles in
-    ``window`` (first, last; default the whole run). (FST would need the system's lz4.)"""
+    other simulators give them. ``uniforms``: the values of the unit's uniform ports.
+    ``memory``: the texture memory behind a unit's memory port, a :class:`sim.stream.Memory`.
+    ``waves``: a path without suffix for a VCD of the cycles in ``window`` (first, last;
+    default the whole run). (FST would need the system's lz4.)"""
     exe = build(name, params, trace=bool(waves))
     unit = make_unit(name, spec=True, **params)
     fin, fout = unit.inputs, unit.outputs
@@ -139,6 +171,10 @@ def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=N
         with open(tmp / "in.bin", "wb") as f:
             np.uint64(n).tofile(f)
             np.array([int((uniforms or {})[u.name]) for u in unit.uniforms], np.int64).tofile(f)
+            mem = memory_for(unit, memory)
+            np.array([len(mem.words), mem.line, mem.latency], np.int64).tofile(f)
+            np.array([mem.p_ready], np.float64).tofile(f)
+            np.asarray(mem.words, np.int64).tofile(f)
             np.ascontiguousarray(rows).tofile(f)
         cmd = [str(exe), str(tmp / "in.bin"), str(tmp / "out.bin"), repr(float(p_valid)),
                repr(float(p_ready)), str(int(seed))]
@@ -167,12 +203,15 @@ def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=N
             raise
         reader.join()
         if proc.returncode != 0:
-            raise BatchError(f"batch run of {name} failed: {''.join(errors).strip()}")
+            raise BatchError(f"batch run of {name} failed: "
+                             f"{held_stages(unit, ''.join(errors).strip())}")
         data = np.fromfile(tmp / "out.bin", np.uint8)
-    outs, cycles, latency, culled = (int(v) for v in data[:32].view(np.int64))
-    table = data[32:].view(dtype).reshape(outs, len(fout))
+    outs, cycles, latency, culled, reads = (int(v) for v in data[:40].view(np.int64))
+    table = data[40:].view(dtype).reshape(outs, len(fout))
     out = {f.name: table[:, k] for k, f in enumerate(fout)}          # views, no copies
     info = {"latency": None if latency < 0 else latency, "cycles": cycles, "waves": wave}
+    if unit.stream_ports:
+        info["memory_reads"] = reads
     if unit.status_ports:
         info["culled"] = culled
     return out, info

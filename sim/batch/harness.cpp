@@ -8,14 +8,22 @@
 // is ready with probability P_READY each cycle: the same rules as sim/stream.py's Traffic,
 // from one generator (splitmix64). A stalled output must hold its payload: the harness checks
 // that and fails naming the cycle. OUT.bin: u64 rows, i64 cycles, latency (-1: none), culled,
-// then rows x N_OUT row_t (int32 or int64, chosen per unit by sim/batch). Progress goes to
+// memory words read, then rows x N_OUT row_t (int32 or int64, chosen per unit by sim/batch). Progress goes to
 // stderr as "progress SENT OUTPUTS" lines.
 // ports.h (generated per unit by sim/batch.py) defines N_IN, N_OUT, MANY, row_t, set_inputs and
-// get_outputs.
+// get_outputs; with MEM, the texture memory port's glue (mem_* below).
+//
+// After the uniforms, IN.bin holds the texture memory: i64 words, i64 line (responses per
+// request), i64 latency (clocks from a request's acceptance to its first response), f64
+// P_MEM (the chance that the memory takes a request, and that it offers a response, each
+// clock: its random stalls), then the words (i64). The memory answers each request with the
+// line's words in order, one a clock at most, the requests in order; a stalled request must
+// hold, like any output.
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <vector>
 
 #include "Vtop.h"
@@ -55,6 +63,14 @@ int main(int argc, char** argv) {
     if (!f || fread(&n, 8, 1, f) != 1) fail("cannot read the input file", 0);
     std::vector<int64_t> uni(N_UNI + 1);
     if (N_UNI && fread(uni.data(), 8, N_UNI, f) != N_UNI) fail("short input file", 0);
+    int64_t mem_head[3] = {0, 1, 0};
+    double p_mem = 1.0;
+    if (fread(mem_head, 8, 3, f) != 3 || fread(&p_mem, 8, 1, f) != 1)
+        fail("short input file", 0);
+    std::vector<int64_t> memory(mem_head[0] + 1);
+    if (mem_head[0] && fread(memory.data(), 8, mem_head[0], f) != (size_t)mem_head[0])
+        fail("short input file", 0);
+    const uint64_t mem_words = mem_head[0], mem_line = mem_head[1], mem_latency = mem_head[2];
     std::vector<row_t> in(n * N_IN + 1);
     if (n && fread(in.data(), sizeof(row_t), n * N_IN, f) != n * N_IN)
         fail("short input file", 0);
@@ -90,6 +106,12 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 2; k++) { tick(0, 0); tick(0, 1); }
     top->rst = 0;
 
+    // the memory: requests taken, each with the cycle its first word is due
+    struct Burst { uint64_t due, addr, next; };
+    std::deque<Burst> bursts;
+    bool resp_valid = false, req_was_held = false;
+    uint64_t resp_data = 0, held_addr = 0, mem_reads = 0;
+    Rng mem_rng{strtoull(argv[5], nullptr, 10) ^ 0x5eedULL};
     std::vector<row_t> out;
     if (!MANY) out.reserve(n * N_OUT);
     std::vector<row_t> cur(N_OUT + 1), held(N_OUT + 1);
@@ -105,6 +127,10 @@ int main(int argc, char** argv) {
         top->i_valid = valid;
         if (valid) set_inputs(top, &in[sent * N_IN]);
         top->o_ready = ready;
+#if MEM
+        const bool mem_take = p_mem >= 1.0 || mem_rng.next() < p_mem;
+        mem_set(top, mem_take, resp_valid, resp_data);
+#endif
         tick(cycles, 0);
         const bool i_ready = top->i_ready, o_valid = top->o_valid;
         if (o_valid) get_outputs(top, cur.data());
@@ -112,6 +138,25 @@ int main(int argc, char** argv) {
             fail("a stalled output changed or was withdrawn before it was taken", cycles);
         was_held = o_valid && !ready;
         if (was_held) held = cur;
+#if MEM
+        uint64_t addr = 0;
+        const bool req = mem_req(top, &addr);
+        if (req_was_held && (!req || addr != held_addr))
+            fail("a stalled memory request changed or was withdrawn before it was taken",
+                 cycles);
+        req_was_held = req && !mem_take;
+        held_addr = addr;
+        if (req && mem_take) {
+            if (addr % mem_line || addr + mem_line > mem_words)
+                fail("a memory request outside the texture memory, or not aligned to a line",
+                     cycles);
+            bursts.push_back({cycles + mem_latency, addr, 0});
+        }
+        const bool mem_moved = (req && mem_take) || (resp_valid && mem_resp_ready(top));
+        if (resp_valid && mem_resp_ready(top)) resp_valid = false;
+#else
+        const bool mem_moved = false;
+#endif
         const bool taken = valid && i_ready;
         if (taken) {
             if (first_in < 0) first_in = cycles;
@@ -128,9 +173,29 @@ int main(int argc, char** argv) {
 #endif
         tick(cycles, 1);
         cycles++;
-        quiet = (taken || (o_valid && ready)) ? 0 : quiet + 1;
-        if (MANY ? quiet > 100000 : cycles > max_cycles)
+#if MEM
+        // the next response: the oldest burst's next word, once it is due (random gaps)
+        if (!resp_valid && !bursts.empty() && bursts.front().due <= cycles &&
+            (p_mem >= 1.0 || mem_rng.next() < p_mem)) {
+            Burst& b = bursts.front();
+            resp_data = (uint64_t)memory[b.addr + b.next];
+            resp_valid = true;
+            mem_reads++;
+            if (++b.next == mem_line) bursts.pop_front();
+        }
+        busy = busy || resp_valid || !bursts.empty();
+#endif
+        quiet = (taken || (o_valid && ready) || mem_moved) ? 0 : quiet + 1;
+        if (MANY ? quiet > 100000 : cycles > max_cycles) {
+#if HELD
+            char what[160];
+            snprintf(what, sizeof what, "no progress (nothing crossed any interface; held=%llx)",
+                     (unsigned long long)top->held);
+            fail(what, cycles);
+#else
             fail("no progress (nothing crossed either interface)", cycles);
+#endif
+        }
         if (!(cycles & ((1u << 20) - 1))) {
             fprintf(stderr, "progress %llu %llu\n", (unsigned long long)sent,
                     (unsigned long long)outs);
@@ -147,9 +212,10 @@ int main(int argc, char** argv) {
     delete top;
     FILE* g = fopen(argv[2], "wb");
     if (!g) fail("cannot write the output file", cycles);
-    const int64_t head[4] = {(int64_t)outs, (int64_t)cycles,
-                             first_out < 0 ? -1 : first_out - first_in, culled};
-    fwrite(head, 8, 4, g);
+    const int64_t head[5] = {(int64_t)outs, (int64_t)cycles,
+                             first_out < 0 ? -1 : first_out - first_in, culled,
+                             (int64_t)mem_reads};
+    fwrite(head, 8, 5, g);
     fwrite(out.data(), sizeof(row_t), out.size(), g);
     fclose(g);
     return 0;
