@@ -24,7 +24,8 @@ from hdl.units import UNITS, describe, make_unit, parse_params
 
 from .cli_common import (UsageError, check_output_path, read_fields, read_inputs, rows,
                          summary, user_errors, write_outputs)
-from .simulators import SIMS, available, simulate
+from .run import simulate
+from .simulators import SIMS, available
 
 def cmd_units(args):
     units = [describe(n) for n in UNITS]
@@ -122,7 +123,11 @@ def cmd_render(args):
     if out and (out.exists() and not out.is_dir() or not out.parent.is_dir()):
         raise UsageError(f"--out {out}: must be a directory, or a new one in an existing "
                          f"directory")
-    render(args.scene, args.out, args.simulator, size)
+    if args.mem_latency < 1 or not 0 < args.mem_ready <= 1:
+        raise UsageError(f"--mem-latency must be at least 1 and --mem-ready in (0, 1], not "
+                         f"{args.mem_latency} and {args.mem_ready}")
+    render(args.scene, args.out, args.simulator, size, mem_latency=args.mem_latency,
+           mem_ready=args.mem_ready)
 
 
 def params_for(names, pairs, chosen):
@@ -223,6 +228,11 @@ def main(argv=None):
                    help="verilator (the batch path, default) | amaranth | icarus | "
                         "cocotb-verilator")
     p.add_argument("--size", metavar="WxH", help="override the scene's image size")
+    p.add_argument("--mem-latency", type=int, default=12, metavar="N",
+                   help="the texture memory's latency in clocks (bump scenes; default 12)")
+    p.add_argument("--mem-ready", type=float, default=1.0, metavar="P",
+                   help="the chance each clock that the texture memory takes a request and "
+                        "offers a response (default 1: no stalls)")
     p = sub.add_parser("check", help="golden vectors through the RTL, or your outputs against "
                                      "golden; one verdict per unit")
     p.add_argument("unit", nargs="?", choices=sorted(UNITS))

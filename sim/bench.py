@@ -23,7 +23,7 @@ import numpy as np
 from golden import MODELS
 from hdl.units import UNITS, make_unit
 
-from .simulators import simulate
+from .run import simulate
 from .cli_common import unit_names, user_errors
 from .simulators import SIMS, available
 from .verilog import BUILD, SCENES

@@ -13,6 +13,9 @@ from hdl.fixed import FieldError, check_arrays
 from hdl.units import ParamError
 from scene.driver import SceneError
 
+from .batch import BatchError
+from .stream import StreamError
+
 NPZ_MAGIC = (b"PK\x03\x04", b"PK\x05\x06")     # a zip (np.savez), or an empty zip
 NPY_MAGIC = b"\x93NUMPY"
 
@@ -114,6 +117,9 @@ def user_errors():
     except (UsageError, FieldError, ParamError, SceneError) as e:
         print(f"error: {e}", file=sys.stderr)
         sys.exit(2)
+    except (BatchError, StreamError) as e:     # the RTL hung or broke a stream rule
+        print(f"error: {e}", file=sys.stderr)
+        sys.exit(1)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         sys.exit(130)

@@ -75,15 +75,23 @@ class SerialWrapper(wiring.Component):
         super().__init__({"sin": In(1), "shift": In(1), "cap": In(1), "iv": In(1),
                           "ordy": In(1), "sout": Out(1)})
 
+    def _streams(self, out):
+        """A memory port's signals that leave the unit (``out``) or enter it."""
+        u, sigs = self.unit, []
+        for name, (d, _) in u.stream_ports.items():
+            port = getattr(u, name)
+            sigs += [port.payload, port.valid] if (d is Out) == out else [port.ready]
+        return sigs
+
     def _sinks(self):
         u = self.unit
         return ([u.i.payload[f.name] for f in u.inputs]
-                + [getattr(u, f"u_{f.name}") for f in u.uniforms])
+                + [getattr(u, f"u_{f.name}") for f in u.uniforms] + self._streams(False))
 
     def _outs(self):
         u = self.unit
         return Cat(u.o.payload, u.o.valid, u.i.ready,
-                   *[getattr(u, name) for name in u.status_ports])
+                   *[getattr(u, name) for name in u.status_ports], *self._streams(True))
 
     @property
     def bits(self):
@@ -115,11 +123,14 @@ class SerialWrapper(wiring.Component):
 
 
 def designs(names):
-    """``[(label, unit name, params)]``: the units, then the default scene's pipeline."""
+    """``[(label, unit name, params)]``: the units, then the scenes' pipelines ("scene": the
+    default scene's; "scene_<name>": ``scenes/<name>.toml``'s)."""
+    from scene.driver import load, prepare
     out = [(n, n, {}) for n in names if n in UNITS]
-    if "scene" in names:
-        from scene.driver import load, prepare
-        out.append(("scene_default", "scene", prepare(load(SCENE))["params"]))
+    for n in names:
+        if n == "scene" or n.startswith("scene_"):
+            path = SCENE if n == "scene" else SCENES / f"{n[len('scene_'):]}.toml"
+            out.append((f"scene_{path.stem}", "scene", prepare(load(path))["params"]))
     return out
 
 
@@ -328,14 +339,17 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m sim.fpga", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--units", help="comma-separated units, 'scene' for the default scene's "
-                                    "pipeline (default: every unit and the scene)")
+                                    "pipeline, 'scene_<name>' for scenes/<name>.toml's "
+                                    "(default: every unit and the scene)")
     ap.add_argument("--devices", default="ecp5,ice40", help="ecp5, ice40 or both (default)")
     ap.add_argument("--seeds", type=int, default=5, help="place-and-route seeds (default 5)")
     ap.add_argument("-j", "--jobs", type=int, default=2, help="parallel tool runs (default 2)")
     ap.add_argument("--out", default=str(OUT), help="report directory (default build/fpga)")
     args = ap.parse_args(argv)
     with user_errors():
-        names = unit_names(args.units, {**UNITS, "scene": None})
+        names = unit_names(args.units, {**UNITS, "scene": None,
+                                        **{f"scene_{p.stem}": None
+                                           for p in SCENES.glob("*.toml")}})
         devices = [d.strip() for d in args.devices.split(",")]
         for d in devices:
             if d not in DEVICES:

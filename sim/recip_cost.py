@@ -15,7 +15,7 @@ from golden import MODELS, TYPICAL_SIZE, random_triangles, raster_hard_cases
 from hdl.arith import recip_seed
 from hdl.units import make_unit
 
-from .simulators import simulate
+from .run import simulate
 from .cli_common import user_errors
 from .simulators import SIMS
 

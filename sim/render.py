@@ -75,7 +75,7 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     the reciprocal, the power table's bits, fenney_dot's renormalisation). ``mem_latency``,
     ``mem_ready``: the texture memory's latency and the chance each clock that it takes a
     request and offers a response (``sim.stream.Memory``)."""
-    from .simulators import simulate
+    from .run import simulate
     scene = S.load(scene_path)
     if size:
         scene["image"]["width"], scene["image"]["height"] = size

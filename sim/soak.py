@@ -16,7 +16,7 @@ import numpy as np
 from golden import MODELS
 from hdl.units import UNITS, make_unit
 
-from .simulators import simulate
+from .run import simulate
 from .cli_common import unit_names, user_errors
 
 CHUNK = 1_000_000            # rows checked against golden at a time (memory)

@@ -277,7 +277,7 @@ def _build(name, params, simulator):
 
 def _unit_error(unit, simulator):
     from golden import MODELS, TYPICAL_SIZE, random_triangles
-    from .simulators import simulate
+    from .run import simulate
     name, params, n = unit["name"], unit["params"], unit["rows"]
     rng = np.random.default_rng(11)
     if name == "raster":

@@ -21,7 +21,7 @@ settings.load_profile("shading")
 
 from golden import MODELS
 from hdl.units import make_unit
-from sim.simulators import simulate
+from sim.run import simulate
 from sim.simulators import SIMS, available
 
 
@@ -78,3 +78,11 @@ def per_simulator(cases, only=DEFAULT_SIMS):
                             for k, v in c.items())
             yield pytest.param(name, *case, id=f"{name}-{case[0]}{extra}", marks=[
                 *sim.marks, pytest.mark.xdist_group(f"{name}-{case[0]}")])
+
+
+def longest_empty_run(triangles, tri):
+    """The longest run of triangles, one after another, with no fragment (``tri``: each
+    fragment's triangle, of ``triangles``)."""
+    covered = np.zeros(triangles, bool)
+    covered[np.asarray(tri)] = True
+    return int((np.diff(np.flatnonzero(np.r_[True, covered, True])) - 1).max())

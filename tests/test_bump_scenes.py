@@ -36,6 +36,8 @@ from scene import driver as S
 from scene.pipeline import ScenePipeline, units_in
 from sim.simulators import available
 
+from .conftest import longest_empty_run
+
 SCENES = "scenes"
 SMALL = {"image": {"width": 64, "height": 64},
          "bump": {"method": "fenney_polar", "map": "bricks", "size": 64}}
@@ -54,10 +56,15 @@ def _prep(**tables):
     return S.prepare(S.parse(data, "bump_test"))
 
 
-def _rtl(prep, **traffic):
-    from sim.simulators import simulate
+def _rtl(prep, latency=12, mem_ready=1.0, **traffic):
+    """The scene through its RTL on the batch path, its texels in a memory of ``latency``
+    clocks that takes a request and offers a response with chance ``mem_ready`` a clock."""
+    from sim.run import simulate
+    from sim.stream import Memory
+    memory = Memory(prep["memory"], latency=latency, p_ready=mem_ready,
+                    seed=traffic.get("seed", 0))
     return simulate("scene", prep["params"], prep["inputs"], "verilator",
-                    uniforms=prep["uniforms"], **traffic)[0]
+                    uniforms=prep["uniforms"], memory=memory, **traffic)[0]
 
 
 def _candidates(prep, frag, ch):
@@ -139,7 +146,8 @@ def test_xz_scene_rtl_within_bound(filter, light):
     # nearest: diffuse only (one lane, six raster channels: a smaller model); bilinear runs H'
     prep = _prep(bump=bump, lights=[{"to_light": light}],
                  shading={"specular": filter == "bilinear"})
-    out = _rtl(prep)
+    # bilinear: four banks' misses share the port; a slow memory that stalls at random
+    out = _rtl(prep, 40, 0.6, p_ready=0.7, seed=5) if filter == "bilinear" else _rtl(prep)
     frag, ch = S.model_fragments(prep)
     assert len(out["x"]) == len(frag["x"]) > 500
     for key in ("tri", "x", "y"):
@@ -234,7 +242,7 @@ def test_angular_scene_rtl_within_bound(rotation, light):
     ang = prep["bump"]["angles"]
     assert (ang["thetan"] < 1e-9).any()                        # theta_N = 0 at some vertex
     assert (ang["phin"].max(1) >= 1).any()           # some triangles cross 0/360 deg
-    out = _rtl(prep)
+    out = _rtl(prep, 25, 0.8, p_valid=0.9, p_ready=0.8, seed=2)
     frag, ch = S.model_fragments(prep)
     assert len(out["x"]) == len(frag["x"]) > 500
     for key in ("tri", "x", "y"):
@@ -269,12 +277,15 @@ def test_angular_flat_map_gives_the_unbumped_surface():
 
 @VERILATOR
 @ONE_MODEL
-def test_polar_scene_under_backpressure():
-    """Random gaps on the input and stalls on the output: the triangles' constants still meet
-    their own fragments (the queue beside the raster loses, repeats and reorders nothing)."""
+@pytest.mark.parametrize("latency,mem_ready", [(1, 1.0), (40, 0.5), (17, 0.9)])
+def test_polar_scene_under_backpressure(latency, mem_ready):
+    """Random gaps on the input, stalls on the output, and a texture memory of 1, 17 or 40
+    clocks that stalls at random on both of its streams: the same fragments as with nothing
+    waiting (the stages' joins and the texel cache lose, repeat and reorder nothing; each
+    fragment keeps its own triangle's constants)."""
     prep = _prep()
     free = _rtl(prep)
-    stalled = _rtl(prep, p_valid=0.6, p_ready=0.5, seed=3)
+    stalled = _rtl(prep, latency, mem_ready, p_valid=0.6, p_ready=0.5, seed=3)
     for key in free:
         np.testing.assert_array_equal(stalled[key], free[key])
 
@@ -371,3 +382,65 @@ def test_non_square_png_map_is_refused(tmp_path):
 def test_polar_bound_is_below_one_level():
     """The bound above assumes the unit is within 1 level of the rounded eq 3."""
     assert fenney.polar_bound(ScenePipeline.PARAMS["trig_bits"]) + 0.5 < 2
+
+
+# ---- dense meshes: runs of triangles that cover no pixel ---------------------------------------
+
+DENSE = {"mesh": {"segments": [96, 64]}}                  # 12,288 triangles at 64 x 64
+FAR = {"camera": {"eye": [0.0, -35.0, 25.0]}, "image": {"width": 48, "height": 48}}
+
+
+def _same_fragments(prep, out):
+    frag, ch = S.model_fragments(prep)
+    assert longest_empty_run(len(prep["inputs"]["x0"]), frag["tri"]) > 16   # > the old queue
+    for key in ("tri", "x", "y"):
+        np.testing.assert_array_equal(out[key], frag[key])
+    return frag, ch
+
+
+@VERILATOR
+@pytest.mark.parametrize("bump,tables", [
+    pytest.param({"method": "fenney_polar"}, DENSE, id="polar-dense", marks=ONE_MODEL),
+    pytest.param({"method": "fenney_polar"}, FAR, id="polar-far", marks=ONE_MODEL),
+    pytest.param({"method": "fenney_xz"}, DENSE, id="xz-dense", marks=XZ_NEAREST),
+    pytest.param({"method": "angular"}, FAR, id="angular-far",
+                 marks=pytest.mark.xdist_group("verilator-scene-angular"))])
+def test_dense_bump_scenes_render(bump, tables):
+    """The scenes that hung the pipeline (a dense fenney_polar torus, the default torus far
+    away) and their like for every bump method, on the batch path with a slow memory: every
+    fragment the model's, in its order, each colour within its method's bound above (the same
+    models as the tests above: the mesh and the camera are data, not hardware)."""
+    spec = {"specular": False} if bump["method"] == "fenney_xz" else {}
+    prep = _prep(bump=bump, shading=spec, **tables)
+    out = _rtl(prep, 30, 0.8, p_ready=0.8, seed=7)
+    frag, ch = _same_fragments(prep, out)
+    rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
+    if bump["method"] == "fenney_polar":
+        hit = (_candidates(prep, frag, ch) == rtl[None]).all(-1).any(0)
+        assert hit.all(), f"{(~hit).sum()} fragments match no colour within the bound"
+        return
+    lo, hi = (_xz_interval if bump["method"] == "fenney_xz" else _angular_interval)(prep, ch)
+    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
+    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
+    assert not ((rtl < c_lo) | (rtl > c_hi)).any()
+
+
+@VERILATOR
+@ONE_MODEL
+def test_a_hang_is_one_line_naming_the_stage(tmp_path):
+    """A memory that answers after 200,000 clocks holds the pipeline longer than the batch
+    harness's watchdog (100,000 clocks with nothing crossing any interface): the render stops
+    with one line that names the cycle and the stage holding data, exit code 1, no
+    traceback (the scene's model is the tests' above: the same effects and sizes)."""
+    import subprocess
+    import sys
+    path = tmp_path / "hang.toml"
+    path.write_text('[image]\nwidth = 64\nheight = 64\n[bump]\nmethod = "fenney_polar"\n'
+                    'size = 64\n')
+    r = subprocess.run([sys.executable, "-m", "sim", "render", str(path), "--out",
+                        str(tmp_path / "o"), "--mem-latency", "200000"],
+                       capture_output=True, text=True)
+    lines = [x for x in r.stderr.splitlines() if x.startswith("error")]
+    assert r.returncode == 1 and "Traceback" not in r.stderr, r.stderr
+    assert len(lines) == 1 and "stages holding data: raster, texture" in lines[0] \
+        and "at cycle" in lines[0], r.stderr

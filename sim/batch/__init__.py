@@ -204,7 +204,7 @@ def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=N
         reader.join()
         if proc.returncode != 0:
             raise BatchError(f"batch run of {name} failed: "
-                             f"{held_stages(unit, ''.join(errors).strip())}")
+                             f"{held_stages(unit, ''.join(errors).strip().removeprefix('error: '))}")
         data = np.fromfile(tmp / "out.bin", np.uint8)
     outs, cycles, latency, culled, reads = (int(v) for v in data[:40].view(np.int64))
     table = data[40:].view(dtype).reshape(outs, len(fout))
