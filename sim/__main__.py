@@ -38,7 +38,8 @@ def cmd_units(args):
         print(f"{u['name']}  (latency {u['latency']} at the defaults)\n  {u['doc']}")
         for k, v in u["params"].items():
             r = u["param_ranges"][k]
-            allowed = (f"{r['min']}..{r['max']}" if "min" in r else
+            allowed = (f"{r['min']}..{r['max']}" if "min" in r else r["string"]
+                       if "string" in r else
                        " | ".join(map(str, r["choices"])) + (", one per channel"
                                                              if "per_channel" in r else ""))
             print(f"    param  {k:12} = {v!s:10} ({allowed})")

@@ -33,6 +33,15 @@ def test_units_json():
     assert units["texel_decode"]["inputs"][0]["name"] == "texel_x"
 
 
+def test_units_text_lists_every_parameter():
+    """The plain listing prints every unit's parameters, the per-channel strings among them
+    (the raster's groups once stopped it with a KeyError)."""
+    r = cli("sim", "units")
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert "param  groups       = 0          (one per channel, comma-separated)" in r.stdout
+    assert "param  flat         = 0          (0..8)" in r.stdout
+
+
 @pytest.mark.parametrize("name,params", [("fenney_dot", {"normalize": True}),
                                          ("fenney_polar", {}), ("texel_decode", {})])
 def test_sim_run_and_golden_run_agree(name, params, tmp_path):
