@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga tradeoffs clean
+.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga tradeoffs texcache clean
 
 setup: $(STAMP)
 
@@ -68,6 +68,11 @@ DASK    ?=
 tradeoffs: setup
 	$(PY) -m sim.tradeoffs $(if $(QUICK),--quick) $(if $(DASK),--dask $(DASK)) \
 		$(if $(filter command line,$(origin SEEDS)),--seeds $(SEEDS))
+
+# The texel cache on the bump scenes: hit rate, fragments per clock, memory words per fragment
+# at 256 and 1024 px, memory latency 12 and 40, three caches: build/texcache/texcache.md.
+texcache: setup
+	$(PY) -m sim.texcache $(if $(QUICK),--quick)
 
 # Method errors (Fenney units, seed 003's rotation) with plots in build/accuracy/.
 accuracy: setup

@@ -29,11 +29,11 @@ import numpy as np
 from golden import angular, bump as bumps, fenney, raster as raster_model
 from golden.bump import rotation
 from hdl.setup_unit.formats import EDGE, VALUE, coord
-from hdl.shade_unit.formats import COEF, RGB
+from hdl.shade_unit.formats import RGB
 from hdl.texture_unit import MAX_TEXTURE
 
 from .pipeline import BUMPS, METHODS, ScenePipeline, choose
-from .stage import lanes as lanes_of
+from .stage import lanes as lanes_of, raw
 from .stages.fenney_polar import pack
 from .stages.texture import ANGLE_BITS
 
@@ -231,10 +231,6 @@ def _unit(v):
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def _raw(x, fmt):
-    return np.clip(np.rint(np.asarray(x) * 2.0 ** fmt.frac_bits), fmt.min, fmt.max).astype(np.int64)
-
-
 def pipeline_params(scene, bump_size=None):
     """The pipeline's parameters for a scene (``bump_size``: the map's, where it has its
     own size)."""
@@ -255,7 +251,7 @@ def pipeline_params(scene, bump_size=None):
 
 def prepare(scene):
     """Everything the hardware and the models take; see the module's docstring."""
-    img, cam, mat, sh = scene["image"], scene["camera"], scene["material"], scene["shading"]
+    img, cam = scene["image"], scene["camera"]
     W, H = img["width"], img["height"]
     pipe = pipeline_params(scene)
     screen_bits, sub_bits = pipe["screen_bits"], pipe["sub_bits"]
@@ -296,7 +292,7 @@ def prepare(scene):
         inputs[f"y{c}"] = np.rint(sy[drawn[:, c]] * S).astype(np.int64)
     for name, (a, b) in (("e01", (0, 1)), ("e02", (0, 2)), ("e12", (1, 2))):
         dots = np.einsum("ij,ij->i", N[drawn[:, a]], N[drawn[:, b]])
-        inputs[name] = np.minimum(_raw((dots - 1) / 2, EDGE), 0)
+        inputs[name] = np.minimum(raw((dots - 1) / 2, EDGE), 0)
     for ch, (name, _) in enumerate(spec.channels):
         for c in range(3):
             if name in ("s", "t"):
@@ -307,28 +303,17 @@ def prepare(scene):
                 val = bump["angles"][name][:, c]
             else:
                 val = vert[name][drawn[:, c]]
-            inputs[f"v{ch}_{c}"] = _raw(val, VALUE)
+            inputs[f"v{ch}_{c}"] = raw(val, VALUE)
     if bump:
         inputs.update({k: v for k, v in bump["constants"].items() if k.startswith("e")})
         for n, (t, k) in enumerate(bump["lanes"] if scene["bump"]["method"] == "fenney_polar"
                                    else ()):   # a lane's constants, its flat word
             inputs[f"f{n}"] = pack({c: bump["constants"][f"{t}{k}_{c}"]
                                     for c in ("k1", "k2", "k3", "q")})
-    # uniforms: L and H (phong), and the colour coefficients
+    # uniforms: each stage's registers from the scene (the lights' L and H, unit vectors)
     uni = {}
-    for j, (L, Hv) in enumerate(zip(Ls, Hs)):
-        for a in range(3):
-            uni[f"l{j}{'xyz'[a]}"], uni[f"h{j}{'xyz'[a]}"] = _raw(L[a], VALUE), _raw(Hv[a], VALUE)
-    angle = lambda a: int(np.rint(a / (2 * np.pi) * (1 << ANGLE_BITS))) % (1 << ANGLE_BITS)
-    for n, v in (("l", Ls[0]), ("h", Hs[0])):            # angular: L and H in polar form
-        pv, tv = angular.to_polar(v)
-        uni[f"phi_{n}"], uni[f"theta_{n}"] = angle(pv), angle(tv)
-    col = np.array(mat["color"])
-    for ci, c in enumerate(RGB):
-        uni[f"amb_{c}"] = _raw(mat["ambient"] * col[ci], COEF)
-        for j, l in enumerate(scene["lights"]):
-            uni[f"kd{j}_{c}"] = _raw(mat["diffuse"] * l["color"][ci] * col[ci], COEF)
-            uni[f"ks{j}_{c}"] = _raw(mat["specular"] * l["color"][ci], COEF)
+    for stage in spec.stages:
+        uni.update(stage.uniform_values(scene, Ls, Hs))
     uni = {f.name: int(uni[f.name]) for f in spec.uniforms}
     image = [s.image for s in spec.stages if hasattr(s, "image")]
     return {"scene": scene, "params": pipe, "pipeline": spec, "inputs": inputs,
@@ -420,7 +405,7 @@ def _bump(scene, drawn, Ls, Hs, pipe):
             for (a, c), name in zip(((0, 1), (0, 2), (1, 2)), ("01", "02", "12")):
                 dots = np.einsum("ij,ij->i", vec[:, a], vec[:, c])
                 consts[f"e{name}_{1 + lanes.index((t, k))}"] = \
-                    np.minimum(_raw((dots - 1) / 2, EDGE), 0)
+                    np.minimum(raw((dots - 1) / 2, EDGE), 0)
         return out
     for t, k in lanes:
         v = bumps.to_tangent((Ls if t == "l" else Hs)[k], Tt, Bt, Nt)

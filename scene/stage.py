@@ -6,7 +6,9 @@ A stage subclasses :class:`Stage` and supplies
 - ``name``: its submodule's name in the composed top, and its unit's in ``metrics.json``;
 - ``channels``: the raster channels it reads, ``(name, mode, group)``;
   ``flat``: the names of the flat words (a triangle's constants) it reads from the raster;
-- ``uniforms``: the registers it reads (``u_<field>`` ports of the top);
+- ``uniforms``: the registers it reads (``u_<field>`` ports of the top), and
+  ``uniform_values(scene, L, H)``: their raw values for a scene (``L``, ``H``: each light's
+  unit vectors, world frame);
 - ``params``: its unit's parameters, from the scene's; ``why``: the scene key that calls for it;
 - ``validate(q)``: its checks on the scene, raising ``ValueError`` that names the scene key;
 - ``latency``: its register stages, from its units;
@@ -21,14 +23,16 @@ A stage subclasses :class:`Stage` and supplies
 joins stages with ``wiring.connect``. Inside a stage the units share one enable (the
 :class:`hdl.unit.Pipeline`), which is cheap; between stages the handshake is the stream's.
 """
+import numpy as np
 from amaranth.hdl import Const, Module, Shape, Signal, Value
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from hdl.fixed import layout
+from hdl.setup_unit.formats import VALUE
 from hdl.unit import Pipeline
 
-__all__ = ["Stage", "StageUnit", "Link", "lanes", "lane_key"]
+__all__ = ["Stage", "StageUnit", "Link", "lanes", "lane_key", "raw"]
 
 
 class Stage:
@@ -49,6 +53,9 @@ class Stage:
 
     def validate(self, q):
         """Checks on the scene beyond the parameters' ranges."""
+
+    def uniform_values(self, scene, L, H):
+        return {}
 
     @property
     def latency(self):
@@ -133,6 +140,12 @@ class StageUnit(wiring.Component):
         m.d.comb += [self.o.payload[k].eq(x) for k, x in self._out.items()]
         m.d.comb += [s.eq(getattr(self, f"u_{k}")) for k, s in self._uni.items()]
         return m
+
+
+def raw(x, fmt=VALUE):
+    """A real value as a format's raw integer (a channel's: ``VALUE``), rounded, saturated."""
+    return np.clip(np.rint(np.asarray(x) * 2.0 ** fmt.frac_bits), fmt.min,
+                   fmt.max).astype(np.int64)
 
 
 def lanes(q):

@@ -69,7 +69,6 @@ def _rtl(prep, latency=12, mem_ready=1.0, **traffic):
 
 def _candidates(prep, frag, ch):
     """Every colour the bound allows, per fragment: (choices, n, 3)."""
-    lsb = 2.0 ** -14
     lanes = [("d" if t == "l" else "s") + str(k) for t, k in prep["bump"]["lanes"]]
     out = []
     for ds in (-1, 0, 1):

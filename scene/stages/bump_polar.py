@@ -9,8 +9,8 @@ from hdl.fixed import Field, binary_angle
 from hdl.illum_unit.bump_polar import BumpPolar as Unit
 from hdl.setup_unit.formats import VALUE
 
-from ..stage import Stage
-from .texture import ANGLE_BITS, raw
+from ..stage import Stage, raw
+from .texture import ANGLE_BITS
 
 LIGHT = ("phi_l", "theta_l", "phi_h", "theta_h")      # L and H in polar form, world frame
 
@@ -37,6 +37,15 @@ class BumpPolar(Stage):
     @property
     def why(self):
         return f"bump.method = angular, bump.rotation = {self.q['rotation']}: rotation x 2, illum"
+
+    def uniform_values(self, scene, L, H):
+        """The light's L and H in polar form (seed 003: phi from x, theta from z), turns."""
+        angle = lambda a: int(np.rint(a / (2 * np.pi) * (1 << ANGLE_BITS))) % (1 << ANGLE_BITS)
+        out = {}
+        for n, vec in (("l", L[0]), ("h", H[0])):
+            phi, theta = angular.to_polar(vec)
+            out[f"phi_{n}"], out[f"theta_{n}"] = angle(phi), angle(theta)
+        return out
 
     def validate(self, q):
         if q["lights"] != 1:

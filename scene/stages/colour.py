@@ -4,10 +4,9 @@ import numpy as np
 
 from golden import shade
 from hdl.shade_unit.colour import Colour as Unit, colour_lanes
-from hdl.shade_unit.formats import RGB, colour_fields
+from hdl.shade_unit.formats import COEF, RGB, colour_fields
 
-from ..stage import Stage
-from .texture import raw
+from ..stage import Stage, raw
 
 
 class Colour(Stage):
@@ -25,6 +24,17 @@ class Colour(Stage):
     @property
     def uniforms(self):
         return colour_fields(self.q["lights"], self.q["specular"])
+
+    def uniform_values(self, scene, L, H):
+        """ambient colour, kd light colour and ks light per light: COEF."""
+        mat, col = scene["material"], np.array(scene["material"]["color"])
+        out = {}
+        for ci, c in enumerate(RGB):
+            out[f"amb_{c}"] = raw(mat["ambient"] * col[ci], COEF)
+            for j, light in enumerate(scene["lights"]):
+                out[f"kd{j}_{c}"] = raw(mat["diffuse"] * light["color"][ci] * col[ci], COEF)
+                out[f"ks{j}_{c}"] = raw(mat["specular"] * light["color"][ci], COEF)
+        return out
 
     @property
     def latency(self):

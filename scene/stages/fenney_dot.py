@@ -8,8 +8,7 @@ from hdl.illum_unit.fenney_dot import FenneyDot as Unit, dot_lanes
 from hdl.setup_unit.formats import VALUE
 from amaranth.hdl import Cat, Const, Mux
 
-from ..stage import Stage, lane_key, lanes
-from .texture import raw
+from ..stage import Stage, lane_key, lanes, raw
 
 
 class FenneyDot(Stage):

@@ -7,8 +7,7 @@ from hdl.fixed import Field
 from hdl.setup_unit.formats import VALUE
 from hdl.shade_unit.phong import Phong as Unit, phong_lanes
 
-from ..stage import Stage
-from .texture import raw
+from ..stage import Stage, raw
 
 
 class Phong(Stage):
@@ -28,6 +27,15 @@ class Phong(Stage):
     @property
     def uniforms(self):
         return [Field(f.name, VALUE) for f in Unit.spec(**self.params).inputs[3:]]   # L, H
+
+    def uniform_values(self, scene, L, H):
+        """Each light's L and H, world frame: VALUE."""
+        out = {}
+        for j, (lv, hv) in enumerate(zip(L, H)):
+            for a in range(3):
+                out[f"l{j}{'xyz'[a]}"], out[f"h{j}{'xyz'[a]}"] = raw(lv[a], VALUE), \
+                    raw(hv[a], VALUE)
+        return out
 
     def validate(self, q):
         if q["bump"] != "none":

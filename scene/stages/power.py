@@ -9,8 +9,7 @@ from hdl.illum_unit.fenney_power import FenneyPower, power_lanes as fenney_lanes
 from hdl.setup_unit.formats import VALUE
 from hdl.shade_unit.power import PowerTable, power_lanes
 
-from ..stage import Stage
-from .texture import raw
+from ..stage import Stage, raw
 
 
 class Power(Stage):

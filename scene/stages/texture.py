@@ -4,27 +4,20 @@ memory port (``tex_req``, ``tex_resp``; ``hdl/texture_unit``). The texels are da
 driver encodes them from the scene's map (``golden.bump``) into the memory image, which the
 harness's memory holds; the hardware depends only on the map's size, the filter and the
 cache."""
-import numpy as np
 from amaranth.lib.wiring import In, Out
 
 from golden import bump as bumps
-from hdl.setup_unit.formats import VALUE
 from hdl.texture_unit import (CACHE_LATENCY, MAX_TEXTURE, address_stages, banks, filter_stages,
                               filtered, lines, memory_image, request_fields, response_fields,
                               texel_cache)
 from hdl.unit import Pipeline
 
-from ..stage import Link, Stage
+from ..stage import Link, Stage, raw
 
 ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotation's default)
 
 
 CACHE = ("cache_lines", "cache_line", "cache_ways", "tex_queue")
-
-
-def raw(v):
-    """A channel's real value as the raster's raw integer (``VALUE``)."""
-    return np.rint(np.asarray(v) / VALUE.lsb).astype(np.int64)
 
 
 class Texture(Stage):

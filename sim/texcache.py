@@ -1,0 +1,71 @@
+"""``make texcache``: the texel cache measured on the bump scenes.
+
+Each bump scene of the gallery rendered through its RTL on the batch path, at 256 x 256 and
+1024 x 1024, with a texture memory of 12 and of 40 clocks' latency, for several caches
+(lines per bank, texels a line, ways): the hit rate (look-ups that found their line), the
+fragments per clock, and the memory words read per fragment. Writes
+``build/texcache/texcache.{json,md}``; ``--quick``: the default cache only, latency 12.
+"""
+import argparse
+import json
+import sys
+
+from .cli_common import user_errors
+from .render import render
+from .verilog import BUILD, SCENES
+
+OUT = BUILD / "texcache"
+SCENE_NAMES = ("bump_polar", "bump_angular", "bump_xz")
+CACHES = ((64, 1, 2), (256, 1, 4), (64, 4, 2))       # (cache_lines, cache_line, cache_ways)
+DEFAULT = CACHES[0]
+
+
+def measure(scene, size, cache, latency):
+    lines, line, ways = cache
+    out = OUT / "render" / f"{scene}-{size}-{lines}x{line}x{ways}-l{latency}"
+    m = render(SCENES / f"{scene}.toml", out, size=(size, size), quiet=True,
+               hardware=dict(cache_lines=lines, cache_line=line, cache_ways=ways),
+               mem_latency=latency)
+    n, reads = m["fragments"], m["memory"]["words_read"]
+    banks = 4 if m["pipeline"]["params"]["filter"] == "bilinear" else 1
+    return {"scene": scene, "size": size, "cache_lines": lines, "cache_line": line,
+            "cache_ways": ways, "latency": latency, "fragments": n, "cycles": m["cycles"],
+            "fragments_per_clock": m["fragments_per_clock"],
+            "words_per_fragment": m["memory"]["words_per_fragment"],
+            "hit_rate": round(1 - reads / line / (n * banks), 4),
+            "filter": m["pipeline"]["params"]["filter"]}
+
+
+def markdown(rows):
+    head = ("| scene (filter) | screen | cache: lines x texels x ways | latency | hit rate | "
+            "fragments per clock | words per fragment |\n| --- | --- | --- | --- | --- | --- "
+            "| --- |")
+    body = [f"| {r['scene']} ({r['filter']}) | {r['size']} | {r['cache_lines']} x "
+            f"{r['cache_line']} x {r['cache_ways']} | {r['latency']} | {r['hit_rate']:.3f} | "
+            f"{r['fragments_per_clock']:.3f} | {r['words_per_fragment']:.3f} |" for r in rows]
+    return "\n".join([head, *body])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python -m sim.texcache", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="the default cache, latency 12")
+    args = ap.parse_args(argv)
+    from tqdm import tqdm
+    todo = [(s, size, c, lat) for s in SCENE_NAMES for size in (256, 1024)
+            for c in ((DEFAULT,) if args.quick else CACHES)
+            for lat in ((12,) if args.quick else (12, 40))]
+    rows = []
+    with user_errors():
+        for job in tqdm(todo, desc="texcache", unit="render", file=sys.stderr):
+            rows.append(measure(*job))
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "texcache.json").write_text(json.dumps(rows, indent=1) + "\n")
+    md = markdown(rows)
+    (OUT / "texcache.md").write_text(md + "\n")
+    print(md)
+    print(f"\nwrote {OUT / 'texcache.json'} and {OUT / 'texcache.md'}")
+
+
+if __name__ == "__main__":
+    main()
