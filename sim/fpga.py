@@ -80,7 +80,7 @@ class SerialWrapper(wiring.Component):
         u, sigs = self.unit, []
         for name, (d, _) in u.stream_ports.items():
             port = getattr(u, name)
-            sigs += [port.payload, port.valid] if (d is Out) == out else [port.ready]
+            sigs += [port.payload.as_value(), port.valid] if (d is Out) == out else [port.ready]
         return sigs
 
     def _sinks(self):
