@@ -242,8 +242,7 @@ def pipeline_params(scene, bump_size=None):
     if sh["power"] == "fenney" and sh["specular"]:
         pipe["concentration"] = fenney_concentration(mat["shininess"])
     if b["method"] != "none":
-        pipe.update(bump=b["method"], bump_map=b["map"], bump_size=bump_size or b["size"],
-                    bump_depth=b["depth"], filter=b["filter"])
+        pipe.update(bump=b["method"], bump_size=bump_size or b["size"], filter=b["filter"])
         if b["method"] == "angular":
             pipe["rotation"] = b["rotation"]
     return {**ScenePipeline.PARAMS, **pipe}

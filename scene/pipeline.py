@@ -52,10 +52,12 @@ SOURCE = {"x": "_pix_x", "y": "_pix_y"}          # the fragment's pixel, as the 
 class ScenePipeline(Unit):
     NAME = "scene"
     DOC = "A scene's pipeline: raster -> (bump stages) -> (phong) -> (power) -> colour"
+    # Its parameters are the effects and the sizes; a bump map is data (the texture memory's
+    # image), so two scenes that differ only in their maps share one Verilog and one model.
     PARAMS = {"screen_bits": 8, "sub_bits": 4, "method": "xshading", "lights": 1,
               "specular": True, "power": "table", "shininess": 32.0, "mant_bits": 6,
               "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
-              "bump": "none", "bump_map": "bricks", "bump_size": 256, "bump_depth": 1.0,
+              "bump": "none", "bump_size": 256,
               "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
               "rsqrt_bits": 12,
               # the texel cache (per bank: lines, texels a line, ways) and its queue
@@ -63,8 +65,8 @@ class ScenePipeline(Unit):
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
               "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
               "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
-              "rsqrt_iters": (1, 3), "bump": BUMPS, "bump_map": None,
-              "bump_size": (16, MAX_TEXTURE), "bump_depth": (0.0, 1e9), "filter": FILTERS,
+              "rsqrt_iters": (1, 3), "bump": BUMPS,
+              "bump_size": (16, MAX_TEXTURE), "filter": FILTERS,
               "trig_bits": (4, 16), "rotation": ("paper", "exact"),
               "rsqrt_bits": DotUnit.RANGES["rsqrt_bits"], "cache_lines": (2, 1024),
               "cache_line": (1, 64), "cache_ways": (1, 8), "tex_queue": (4, 512)}

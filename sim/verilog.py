@@ -53,12 +53,16 @@ def field_map(unit):
     ports = [{"port": "clk", "direction": "input", "width": 1, "role": "clock, rising edge"},
              {"port": "rst", "direction": "input", "width": 1,
               "role": "synchronous reset, active high"}]
-    for side, fields, direction in (("i", unit.inputs, "input"), ("o", unit.outputs, "output")):
+    streams = [("i", unit.inputs, "input", "stream i"), ("o", unit.outputs, "output", "stream o")]
+    streams += [(name, fields, "output" if d.name == "Out" else "input",
+                 STREAM_ROLES.get(name, "stream")) for name, (d, fields) in
+                unit.stream_ports.items()]
+    for side, fields, direction, role in streams:
         back = "output" if direction == "input" else "input"
         ports.append({"port": f"{side}_valid", "direction": direction, "width": 1,
-                      "role": f"stream {side}: the fields below are valid"})
+                      "role": f"{role}: the fields below are valid"})
         ports.append({"port": f"{side}_ready", "direction": back, "width": 1,
-                      "role": f"stream {side}: a transfer happens when valid and ready are high"})
+                      "role": f"{role}: a transfer happens when valid and ready are high"})
         ports += [{"port": f"{side}_{f.name}", "direction": direction, "field": f.name,
                    **f.fmt.describe(), "value": _meaning(f.fmt)}
                   for f in fields]
@@ -69,17 +73,6 @@ def field_map(unit):
     for name in unit.status_ports:
         ports.append({"port": name, "direction": "output", "width": len(getattr(unit, name)),
                       "role": STATUS_ROLES.get(name, "status")})
-    for name, (d, fields) in unit.stream_ports.items():
-        out = "output" if d.name == "Out" else "input"
-        back = "input" if out == "output" else "output"
-        role = STREAM_ROLES.get(name, "stream")
-        ports.append({"port": f"{name}_valid", "direction": out, "width": 1,
-                      "role": f"{role}: the fields below are valid"})
-        ports.append({"port": f"{name}_ready", "direction": back, "width": 1,
-                      "role": f"{role}: a transfer happens when valid and ready are high"})
-        ports += [{"port": f"{name}_{f.name}", "direction": out, "field": f.name,
-                   **f.fmt.describe(), "value": _meaning(f.fmt), "role": role}
-                  for f in fields]
     return {"module": unit.NAME, "params": dict(unit.params), "latency": unit.latency,
             "one_row_per_clock": True, "ports": ports}
 

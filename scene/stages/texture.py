@@ -51,7 +51,8 @@ class Texture(Stage):
 
     @property
     def why(self):
-        return f"bump.map = {self.q['bump_map']}: {self.kind} texels, {self.q['filter']}"
+        return (f"bump.method = {self.q['bump']}: {self.kind} texels, {self.q['filter']}, "
+                f"{self.q['bump_size']} a side, through the texel cache")
 
     def validate(self, q):
         for k in ("cache_lines", "cache_line", "cache_ways", "tex_queue"):
