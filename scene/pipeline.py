@@ -61,7 +61,8 @@ class ScenePipeline(Unit):
               "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
               "rsqrt_bits": 12,
               # the texel cache (per bank: lines, texels a line, ways) and its queue
-              "cache_lines": 64, "cache_line": 1, "cache_ways": 2, "tex_queue": 64}
+              "cache_lines": 64, "cache_line": 1, "cache_ways": 2, "tex_queue": 64,
+              "bank_ports": True}   # a memory port per bank (bilinear: 4), or one shared
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
               "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
               "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),

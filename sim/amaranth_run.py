@@ -1,7 +1,7 @@
 """Streaming vectors through a unit in Amaranth's simulator."""
 from amaranth.sim import Simulator
 
-from .stream import Traffic, pack, unpack
+from .stream import Traffic, memory_ports, pack, unpack
 
 
 def fields_of(unit):
@@ -22,28 +22,30 @@ def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, pr
     async def bench(ctx):
         for f in unit.uniforms:
             ctx.set(getattr(unit, f"u_{f.name}"), int(uniforms[f.name]))
-        port = [unit.tex_req.valid, unit.tex_req.payload.addr, unit.tex_resp.ready] \
-            if memory else []
+        names = memory_ports(unit)
+        mems = memory.ports(len(names)) if names else []
+        ports = [(getattr(unit, q), getattr(unit, r)) for q, r in names]
+        sampled = [s for q, r in ports for s in (q.valid, q.payload.addr, r.ready)]
         while not traffic.done:
             valid, payload, ready = traffic.drive()
             ctx.set(unit.i.valid, valid)
             ctx.set(i_raw, payload)
             ctx.set(unit.o.ready, ready)
-            if memory:
-                take, rv, rd = memory.drive()
-                ctx.set(unit.tex_req.ready, take)
-                ctx.set(unit.tex_resp.valid, rv)
-                ctx.set(unit.tex_resp.payload.data, rd)
-            _, _, i_ready, o_valid, o_payload, b, *mem = \
-                await ctx.tick().sample(unit.i.ready, unit.o.valid, o_raw, busy, *port)
-            if memory:
-                memory.edge(traffic.cycles, *mem)
-                b = b or memory.busy
+            for mem, (q, r) in zip(mems, ports):
+                take, rv, rd = mem.drive()
+                ctx.set(q.ready, take)
+                ctx.set(r.valid, rv)
+                ctx.set(r.payload.data, rd)
+            _, _, i_ready, o_valid, o_payload, b, *got = \
+                await ctx.tick().sample(unit.i.ready, unit.o.valid, o_raw, busy, *sampled)
+            for k, mem in enumerate(mems):
+                mem.edge(traffic.cycles, *got[3 * k:3 * k + 3])
+                b = b or mem.busy
             traffic.edge(i_ready, o_valid, o_payload, b)
         if many:
             traffic.status = {"culled": ctx.get(unit.culled)}
-            if memory:
-                traffic.status["memory_reads"] = memory.reads
+            if mems:
+                traffic.status["memory_reads"] = sum(mem.reads for mem in mems)
 
     sim = Simulator(unit)
     sim.add_clock(1e-8)

@@ -31,11 +31,13 @@ async def stream_vectors(dut):
                       seed=spec["seed"], many=spec["many"],
                       progress=report_to(os.environ["SHADE_PROGRESS"]))
     busy = dut.busy if spec["many"] else None
-    mem = None
-    if "memory" in spec:                             # the texture memory behind the port
+    mems = []
+    if "memory" in spec:                             # the texture memory behind the ports
         with np.load(os.environ["SHADE_MEM"]) as z:
-            mem = Memory(z["words"], **spec["memory"])
-        dut.tex_req_ready.value = dut.tex_resp_valid.value = 0
+            mems = Memory(z["words"], **spec["memory"]).ports(len(spec["memory_ports"]))
+        for q, r in spec["memory_ports"]:
+            getattr(dut, f"{q}_ready").value = 0
+            getattr(dut, f"{r}_valid").value = 0
     in_ports = [getattr(dut, f"i_{f['name']}") for f in fin]
     out_ports = [getattr(dut, f"o_{f['name']}") for f in fout]
     Clock(dut.clk, 10, unit="ns").start()
@@ -61,17 +63,18 @@ async def stream_vectors(dut):
             for port, value in zip(in_ports, rows[row]):
                 port.value = value
         o_ready.value = ready
-        if mem:
+        for mem, (q, r) in zip(mems, spec.get("memory_ports", ())):
             take, rv, rd = mem.drive()
-            dut.tex_req_ready.value, dut.tex_resp_valid.value = int(take), int(rv)
-            dut.tex_resp_data.value = rd
+            getattr(dut, f"{q}_ready").value = int(take)
+            getattr(dut, f"{r}_valid").value = int(rv)
+            getattr(dut, f"{r}_data").value = rd
         await ReadOnly()
         ov = int(o_valid.value)
         got = tuple(int(p.value) for p in out_ports) if ov and ready else 0
         b = int(busy.value) if busy is not None else None
-        if mem:
-            mem.edge(traffic.cycles, int(dut.tex_req_valid.value), int(dut.tex_req_addr.value),
-                     int(dut.tex_resp_ready.value))
+        for mem, (q, r) in zip(mems, spec.get("memory_ports", ())):
+            mem.edge(traffic.cycles, int(getattr(dut, f"{q}_valid").value),
+                     int(getattr(dut, f"{q}_addr").value), int(getattr(dut, f"{r}_ready").value))
             b = b or mem.busy
         traffic.edge(int(i_ready.value), ov, got, b)
     out = {}
@@ -81,7 +84,7 @@ async def stream_vectors(dut):
             col = np.where(col >> (f["width"] - 1) & 1, col - (1 << f["width"]), col)
         out[f["name"]] = col
     status = {"culled": int(dut.culled.value)} if spec["many"] else {}
-    if mem:
-        status["memory_reads"] = mem.reads
+    if mems:
+        status["memory_reads"] = sum(mem.reads for mem in mems)
     np.savez(os.environ["SHADE_OUT"], latency=traffic.latency if traffic.latency is not None
              else -1, cycles=traffic.cycles, **status, **out)

@@ -111,8 +111,10 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
             "many": bool(unit.status_ports),
             "uniforms": [{**f.describe(), "value": int(uniforms[f.name])} for f in unit.uniforms]}
     if memory is not None:
+        from .stream import memory_ports
         spec["memory"] = {"line": memory.line, "latency": memory.latency,
                           "p_ready": memory.p_ready, "seed": seed}
+        spec["memory_ports"] = memory_ports(unit)
     with tempfile.TemporaryDirectory(dir=build_dir.parent) as tmp:
         tmp = Path(tmp)
         (tmp / "spec.json").write_text(json.dumps(spec))

@@ -35,7 +35,7 @@ def simulate(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, seed=
         label = progress if isinstance(progress, str) else name
         bar = Progress(f"{label} on {simulator}", rows(inputs), many,
                        "tri" if many else "row")
-    if memory is not None and "tex_req" in unit.stream_ports:
+    if memory is not None and unit.stream_ports:
         memory = memory.with_line(unit.params["cache_line"])
     traffic = dict(p_valid=p_valid, p_ready=p_ready, seed=seed, uniforms=uniforms,
                    memory=memory)

@@ -9,7 +9,7 @@ import random
 
 import numpy as np
 
-__all__ = ["pack", "unpack", "Traffic", "StreamError", "Memory"]
+__all__ = ["pack", "unpack", "Traffic", "StreamError", "Memory", "memory_ports"]
 
 
 class StreamError(RuntimeError):
@@ -126,6 +126,7 @@ class Memory:
                              f"{latency}, {p_ready}")
         self.words = np.asarray(words, np.int64)
         self.line, self.latency, self.p_ready = int(line), int(latency), float(p_ready)
+        self.seed = seed
         self.rng = random.Random(seed ^ 0x5eed)
         self.bursts = []                # [due cycle, address, next word]
         self.resp_valid, self.resp_data, self.take, self.reads = False, 0, False, 0
@@ -135,6 +136,15 @@ class Memory:
         """The same memory, answering ``line`` words per request (the cache's line)."""
         self.line = int(line)
         return self
+
+    def ports(self, n):
+        """``n`` readers of this memory, each a port with stalls of its own (the first is
+        this one)."""
+        out = [self]
+        for k in range(1, n):
+            port = Memory(self.words, self.line, self.latency, self.p_ready, self.seed + k)
+            out.append(port)
+        return out
 
     def drive(self):
         """``(request ready, response valid, response data)`` to set before a clock edge."""
@@ -169,3 +179,9 @@ class Memory:
     @property
     def busy(self):
         return self.resp_valid or bool(self.bursts)
+
+
+def memory_ports(unit):
+    """A unit's texture memory ports: ``[(request stream, response stream)]`` by name."""
+    return [(n, "tex_resp" + n[len("tex_req"):]) for n in unit.stream_ports
+            if n.startswith("tex_req")]

@@ -49,13 +49,14 @@ def _log2(n):
     return n.bit_length() - 1
 
 
-def texel_cache(m, i, v, o, req, resp, *, banks, lines, line, ways, bank_texels, texel_bits,
-                depth):
+def texel_cache(m, i, v, o, reqs, resps, *, banks, lines, line, ways, bank_texels,
+                texel_bits, depth):
     """The cache between the handshakes ``i`` (in: values ``v`` at its register, among them
     ``_ln<k>`` and ``_off<k>``, bank k's line number and the texel's place in the line) and
-    ``o`` (out; ``o.ready`` is driven by the caller). ``req``, ``resp``: the memory port's
-    streams. Returns ``(values, busy)``: ``v`` without the line keys, with ``_tex<k>`` (bank
-    k's texel) from the output register."""
+    ``o`` (out; ``o.ready`` is driven by the caller). ``reqs``, ``resps``: the memory ports'
+    streams, one shared by every bank or one per bank. Returns ``(values, busy)``: ``v``
+    without the line keys, with ``_tex<k>`` (bank k's texel) from the output register."""
+    shared = len(reqs) == 1
     sets = lines // ways
     sb, wb, lb = _log2(sets), _log2(ways), _log2(line)
     tag_bits = max(1, _log2(bank_texels) - lb - sb)
@@ -98,37 +99,45 @@ def texel_cache(m, i, v, o, req, resp, *, banks, lines, line, ways, bank_texels,
     first = [Signal(name=f"tc_first{k}") for k in range(banks)]      # the lowest missing bank
     for k in range(banks):
         m.d.comb += first[k].eq(remaining[k] & ~(remaining[:k].any() if k else Const(0)))
-    addr = Const(0, ADDR.width)
-    for k in reversed(range(banks)):
-        line_addr = Cat(Const(0, lb), lnum[k], Const(k, max(1, _log2(banks))) if banks > 1
-                        else Const(0, 0))
-        addr = Mux(first[k], line_addr, addr)
+    line_addr = [Cat(Const(0, lb), lnum[k], Const(k, max(1, _log2(banks))) if banks > 1
+                     else Const(0, 0)) for k in range(banks)]
 
     # ---- the queue: the fragment's values, each bank's slot and offset, and which missed
     riding = list(v.items())
     width = sum(len(x) for _, x in riding) + banks * (slot_bits + lb + 1)
     m.submodules.tex_queue = fifo = SyncFIFOBuffered(width=width, depth=depth)
     ready = i.valid & ~clearing
-    m.d.comb += [req.valid.eq(ready & remaining.any()), req.payload.addr.eq(addr)]
-    sent = req.valid & req.ready
+    send = []                  # bank k's request goes out this clock
+    if shared:                 # the lowest missing bank's, one a clock
+        addr = Const(0, ADDR.width)
+        for k in reversed(range(banks)):
+            addr = Mux(first[k], line_addr[k], addr)
+        req = reqs[0]
+        m.d.comb += [req.valid.eq(ready & remaining.any()), req.payload.addr.eq(addr)]
+        send = [req.valid & req.ready & first[k] for k in range(banks)]
+    else:                      # every missing bank's at once, each on its own port
+        for k, req in enumerate(reqs):
+            m.d.comb += [req.valid.eq(ready & remaining[k]), req.payload.addr.eq(line_addr[k])]
+            send.append(req.valid & req.ready)
     for k, w, wr_here in issue:
-        m.d.comb += wr_here.eq(sent & first[k] & (rr[k] == w if ways > 1 else 1))
+        m.d.comb += wr_here.eq(send[k] & (rr[k] == w if ways > 1 else 1))
     for k in range(banks):
-        with m.If(sent & first[k]):
+        with m.If(send[k]):
             m.d.sync += rr[k].eq(rr[k] + 1)
     # the fragment enters the queue when its last miss goes out, or at once if it had none
-    one_left = (remaining & (remaining - 1)) == 0
-    push = ready & fifo.w_rdy & (~remaining.any() | (sent & one_left))
+    push = ready & fifo.w_rdy
+    for k in range(banks):
+        push = push & (~remaining[k] | send[k])
     m.d.comb += [i.ready.eq(push), fifo.w_en.eq(push)]
     with m.If(push):
         m.d.sync += missed.eq(0)
-    with m.Elif(sent):
-        m.d.sync += missed.eq(missed | Cat(*first))
+    with m.Else():
+        m.d.sync += missed.eq(missed | Cat(*send))
     per_bank = []
     for k in range(banks):
-        way = Mux(sent & first[k], rr[k], hit_way[k])       # a miss sent now: its victim's
+        way = Mux(send[k], rr[k], hit_way[k])                # a miss sent now: its victim's
         slot = Cat(way[:wb], lnum[k][:sb]) if wb else lnum[k][:sb]
-        per_bank += [slot[:slot_bits], offs[k][:lb], missed[k] | (sent & first[k])]
+        per_bank += [slot[:slot_bits], offs[k][:lb], missed[k] | send[k]]
     m.d.comb += fifo.w_data.eq(Cat(*(x for _, x in riding), *per_bank))
 
     # ---- the head: the missed lines from the port, then the texels
@@ -146,24 +155,40 @@ def texel_cache(m, i, v, o, req, resp, *, banks, lines, line, ways, bank_texels,
         miss.append(fifo.r_data[at + slot_bits + lb])
         at += slot_bits + lb + 1
     served = Signal(banks)
-    count = Signal(max(1, lb))
     need = Cat(*(miss[k] & ~served[k] for k in range(banks))) & \
         Cat(*([fifo.r_rdy] * banks))
-    cur = [need[k] & ~(need[:k].any() if k else Const(0)) for k in range(banks)]
-    only = (need & (need - 1)) == 0
     out_valid = Signal(name="tc_out_valid")
     en = ~out_valid | o.ready
-    m.d.comb += resp.ready.eq(need.any())
-    got = resp.valid & resp.ready
-    end_of_line = count == line - 1 if lb else Const(1)
-    last = got & end_of_line & only
-    go = fifo.r_rdy & (~need.any() | last) & en
-    with m.If(got):
-        m.d.sync += count.eq(Mux(end_of_line, 0, count + 1))
-        with m.If(end_of_line):
-            m.d.sync += served.eq(served | Cat(*cur))
-    with m.If(go):
-        m.d.sync += served.eq(0)
+    # each bank's writes: from the shared port, the lowest bank that needs its line; else
+    # from its own port. A bank's line is complete with its last texel.
+    if shared:
+        cur = [need[k] & ~(need[:k].any() if k else Const(0)) for k in range(banks)]
+        m.d.comb += resps[0].ready.eq(need.any())
+        got = resps[0].valid & resps[0].ready
+        counts = [Signal(max(1, lb), name="tc_count")] * banks
+        writes = [got & cur[k] for k in range(banks)]
+        datas = [resps[0].payload.data] * banks
+    else:
+        for k, resp in enumerate(resps):
+            m.d.comb += resp.ready.eq(need[k])
+        counts = [Signal(max(1, lb), name=f"tc_count{k}") for k in range(banks)]
+        writes = [resp.valid & resp.ready for resp in resps]
+        datas = [resp.payload.data for resp in resps]
+    ends = [(c == line - 1) if lb else Const(1) for c in counts]
+    go = fifo.r_rdy & en
+    for k in range(banks):
+        go = go & (~need[k] | (writes[k] & ends[k]))
+    # one counter shared (any bank's write moves it), or one a bank
+    groups = [(counts[0], Cat(*writes).any(), ends[0])] if shared else \
+        list(zip(counts, writes, ends))
+    for count, moved, end in groups:
+        with m.If(moved):
+            m.d.sync += count.eq(Mux(end, 0, count + 1))
+    for k in range(banks):
+        with m.If(go):
+            m.d.sync += served[k].eq(0)
+        with m.Elif(writes[k] & ends[k]):
+            m.d.sync += served[k].eq(1)
     m.d.comb += fifo.r_en.eq(go)
     out = {}
     for k in range(banks):
@@ -171,8 +196,8 @@ def texel_cache(m, i, v, o, req, resp, *, banks, lines, line, ways, bank_texels,
         m.submodules[f"texels{k}"] = data
         wr = data.write_port()
         rd = data.read_port(transparent_for=(wr,))
-        m.d.comb += [wr.addr.eq(Cat(count[:lb], slot[k]) if lb else slot[k]),
-                     wr.data.eq(resp.payload.data), wr.en.eq(got & cur[k]),
+        m.d.comb += [wr.addr.eq(Cat(counts[k][:lb], slot[k]) if lb else slot[k]),
+                     wr.data.eq(datas[k]), wr.en.eq(writes[k]),
                      rd.addr.eq(Cat(off[k][:lb], slot[k]) if lb else slot[k]), rd.en.eq(en)]
         out[f"_tex{k}"] = rd.data
     with m.If(en):

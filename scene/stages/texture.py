@@ -17,7 +17,7 @@ from ..stage import Link, Stage, raw
 ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotation's default)
 
 
-CACHE = ("cache_lines", "cache_line", "cache_ways", "tex_queue")
+CACHE = ("cache_lines", "cache_line", "cache_ways", "tex_queue", "bank_ports")
 
 
 class Texture(Stage):
@@ -45,9 +45,19 @@ class Texture(Stage):
         return out
 
     @property
+    def port_names(self):
+        """``[(request, response)]``: one port shared by the banks, or one per bank."""
+        n = banks(self.q["filter"]) if self.q["bank_ports"] else 1
+        return [("tex_req", "tex_resp")] if n == 1 else \
+            [(f"tex_req{k}", f"tex_resp{k}") for k in range(n)]
+
+    @property
     def ports(self):
-        return {"tex_req": (Out, request_fields()),
-                "tex_resp": (In, response_fields(2 * self.bits))}
+        out = {}
+        for req, resp in self.port_names:
+            out.update({req: (Out, request_fields()),
+                        resp: (In, response_fields(2 * self.bits))})
+        return out
 
     @property
     def why(self):
@@ -86,7 +96,8 @@ class Texture(Stage):
         p1 = Pipeline(m, i, a_out)
         v = lines(p1, v, "s", "t", size, f, q["cache_line"])
         m.d.comb += a_out.valid.eq(p1.valid)
-        v, busy = texel_cache(m, a_out, v, c_out, ports["tex_req"], ports["tex_resp"],
+        v, busy = texel_cache(m, a_out, v, c_out, [ports[r] for r, _ in self.port_names],
+                              [ports[r] for _, r in self.port_names],
                               banks=n, lines=q["cache_lines"], line=q["cache_line"],
                               ways=q["cache_ways"], bank_texels=size * size // n,
                               texel_bits=2 * self.bits, depth=q["tex_queue"])

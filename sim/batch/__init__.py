@@ -73,15 +73,22 @@ def ports_header(unit):
             lines.append(f"    t->{prefix}_{f.name} = ({_ctype(f.fmt.width)})((uint64_t)r[{k}] & "
                          f"{mask:#x}ULL);")
         lines.append("}")
-    mem = "tex_req" in unit.stream_ports
-    lines += [f"#define MEM {int(mem)}", f"#define HELD {int('held' in unit.status_ports)}"]
-    if mem:                    # the texture memory port (sim/batch/harness.cpp's memory)
-        lines += ["static inline void mem_set(Vtop* t, bool take, bool valid, uint64_t data) {",
-                  "    t->tex_req_ready = take;", "    t->tex_resp_valid = valid;",
-                  "    t->tex_resp_data = data;", "}",
-                  "static inline bool mem_req(Vtop* t, uint64_t* addr) {",
-                  "    *addr = t->tex_req_addr;", "    return t->tex_req_valid;", "}",
-                  "static inline bool mem_resp_ready(Vtop* t) { return t->tex_resp_ready; }"]
+    from ..stream import memory_ports
+    mem = memory_ports(unit)
+    lines += [f"#define MEM {len(mem)}", f"#define HELD {int('held' in unit.status_ports)}"]
+    # the texture memory ports (sim/batch/harness.cpp's memory): port p's signals
+    cases = lambda body: "    switch (p) {\n" + "".join(
+        f"    case {p}: {body(req, resp)} break;\n" for p, (req, resp) in enumerate(mem)) + \
+        "    }\n"
+    lines += ["static inline void mem_set(Vtop* t, int p, bool take, bool valid, "
+              "uint64_t data) {",
+              cases(lambda q, r: f"t->{q}_ready = take; t->{r}_valid = valid; "
+                                 f"t->{r}_data = data;") + "}",
+              "static inline bool mem_req(Vtop* t, int p, uint64_t* addr) {",
+              cases(lambda q, r: f"*addr = t->{q}_addr; return t->{q}_valid;") +
+              "    return false;\n}",
+              "static inline bool mem_resp_ready(Vtop* t, int p) {",
+              cases(lambda q, r: f"return t->{r}_ready;") + "    return false;\n}"]
     lines.append("static inline void get_outputs(Vtop* t, row_t* r) {")
     for k, f in enumerate(fout):
         get = f"(uint64_t)t->o_{f.name}"
@@ -92,9 +99,9 @@ def ports_header(unit):
 
 
 def memory_for(unit, memory):
-    """The memory behind a unit's memory port (none: an empty one for a unit without)."""
-    from ..stream import Memory
-    if "tex_req" in unit.stream_ports and memory is None:
+    """The memory behind a unit's memory ports (none: an empty one for a unit without)."""
+    from ..stream import Memory, memory_ports
+    if memory_ports(unit) and memory is None:
         raise BatchError(f"{unit.NAME} reads texels through its memory port: give the run a "
                          f"memory (sim.stream.Memory)")
     return memory or Memory([])

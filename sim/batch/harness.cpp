@@ -11,7 +11,7 @@
 // memory words read, then rows x N_OUT row_t (int32 or int64, chosen per unit by sim/batch). Progress goes to
 // stderr as "progress SENT OUTPUTS" lines.
 // ports.h (generated per unit by sim/batch.py) defines N_IN, N_OUT, MANY, row_t, set_inputs and
-// get_outputs; with MEM, the texture memory port's glue (mem_* below).
+// get_outputs; MEM, the number of texture memory ports, and their glue (mem_* below).
 //
 // After the uniforms, IN.bin holds the texture memory: i64 words, i64 line (responses per
 // request), i64 latency (clocks from a request's acceptance to its first response), f64
@@ -106,12 +106,17 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 2; k++) { tick(0, 0); tick(0, 1); }
     top->rst = 0;
 
-    // the memory: requests taken, each with the cycle its first word is due
+    // the memory, per port: requests taken, each with the cycle its first word is due
     struct Burst { uint64_t due, addr, next; };
-    std::deque<Burst> bursts;
-    bool resp_valid = false, req_was_held = false;
-    uint64_t resp_data = 0, held_addr = 0, mem_reads = 0;
-    Rng mem_rng{strtoull(argv[5], nullptr, 10) ^ 0x5eedULL};
+    struct Port {
+        std::deque<Burst> bursts;
+        bool resp_valid = false, req_was_held = false, take = false;
+        uint64_t resp_data = 0, held_addr = 0;
+        Rng rng{0};
+    };
+    std::vector<Port> ports(MEM + 1);
+    for (int p = 0; p <= MEM; p++) ports[p].rng.s = strtoull(argv[5], nullptr, 10) ^ (0x5eedULL + p);
+    uint64_t mem_reads = 0;
     std::vector<row_t> out;
     if (!MANY) out.reserve(n * N_OUT);
     std::vector<row_t> cur(N_OUT + 1), held(N_OUT + 1);
@@ -127,10 +132,11 @@ int main(int argc, char** argv) {
         top->i_valid = valid;
         if (valid) set_inputs(top, &in[sent * N_IN]);
         top->o_ready = ready;
-#if MEM
-        const bool mem_take = p_mem >= 1.0 || mem_rng.next() < p_mem;
-        mem_set(top, mem_take, resp_valid, resp_data);
-#endif
+        for (int p = 0; p < MEM; p++) {
+            Port& q = ports[p];
+            q.take = p_mem >= 1.0 || q.rng.next() < p_mem;
+            mem_set(top, p, q.take, q.resp_valid, q.resp_data);
+        }
         tick(cycles, 0);
         const bool i_ready = top->i_ready, o_valid = top->o_valid;
         if (o_valid) get_outputs(top, cur.data());
@@ -138,25 +144,25 @@ int main(int argc, char** argv) {
             fail("a stalled output changed or was withdrawn before it was taken", cycles);
         was_held = o_valid && !ready;
         if (was_held) held = cur;
-#if MEM
-        uint64_t addr = 0;
-        const bool req = mem_req(top, &addr);
-        if (req_was_held && (!req || addr != held_addr))
-            fail("a stalled memory request changed or was withdrawn before it was taken",
-                 cycles);
-        req_was_held = req && !mem_take;
-        held_addr = addr;
-        if (req && mem_take) {
-            if (addr % mem_line || addr + mem_line > mem_words)
-                fail("a memory request outside the texture memory, or not aligned to a line",
+        bool mem_moved = false;
+        for (int p = 0; p < MEM; p++) {
+            Port& q = ports[p];
+            uint64_t addr = 0;
+            const bool req = mem_req(top, p, &addr);
+            if (q.req_was_held && (!req || addr != q.held_addr))
+                fail("a stalled memory request changed or was withdrawn before it was taken",
                      cycles);
-            bursts.push_back({cycles + mem_latency, addr, 0});
+            q.req_was_held = req && !q.take;
+            q.held_addr = addr;
+            if (req && q.take) {
+                if (addr % mem_line || addr + mem_line > mem_words)
+                    fail("a memory request outside the texture memory, or not aligned to a "
+                         "line", cycles);
+                q.bursts.push_back({cycles + mem_latency, addr, 0});
+                mem_moved = true;
+            }
+            if (q.resp_valid && mem_resp_ready(top, p)) q.resp_valid = false, mem_moved = true;
         }
-        const bool mem_moved = (req && mem_take) || (resp_valid && mem_resp_ready(top));
-        if (resp_valid && mem_resp_ready(top)) resp_valid = false;
-#else
-        const bool mem_moved = false;
-#endif
         const bool taken = valid && i_ready;
         if (taken) {
             if (first_in < 0) first_in = cycles;
@@ -173,18 +179,19 @@ int main(int argc, char** argv) {
 #endif
         tick(cycles, 1);
         cycles++;
-#if MEM
-        // the next response: the oldest burst's next word, once it is due (random gaps)
-        if (!resp_valid && !bursts.empty() && bursts.front().due <= cycles &&
-            (p_mem >= 1.0 || mem_rng.next() < p_mem)) {
-            Burst& b = bursts.front();
-            resp_data = (uint64_t)memory[b.addr + b.next];
-            resp_valid = true;
-            mem_reads++;
-            if (++b.next == mem_line) bursts.pop_front();
+        // each port's next response: its oldest burst's next word, once due (random gaps)
+        for (int p = 0; p < MEM; p++) {
+            Port& q = ports[p];
+            if (!q.resp_valid && !q.bursts.empty() && q.bursts.front().due <= cycles &&
+                (p_mem >= 1.0 || q.rng.next() < p_mem)) {
+                Burst& b = q.bursts.front();
+                q.resp_data = (uint64_t)memory[b.addr + b.next];
+                q.resp_valid = true;
+                mem_reads++;
+                if (++b.next == mem_line) q.bursts.pop_front();
+            }
+            busy = busy || q.resp_valid || !q.bursts.empty();
         }
-        busy = busy || resp_valid || !bursts.empty();
-#endif
         quiet = (taken || (o_valid && ready) || mem_moved) ? 0 : quiet + 1;
         if (MANY ? quiet > 100000 : cycles > max_cycles) {
 #if HELD
