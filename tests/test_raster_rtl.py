@@ -12,6 +12,8 @@ from hdl.units import ParamError, make_unit
 from .conftest import per_simulator, stream
 
 SMALL = {"screen_bits": 6}                    # 64 x 64: whole-screen triangles in seconds
+# two channels in two groups of edge constants, and two flat words
+GROUPS = {**SMALL, "channels": 2, "modes": "exact,xshading", "groups": "0,1", "flat": 2}
 
 
 def check(inputs, out, params):
@@ -99,8 +101,9 @@ def test_edge_constant_groups(simulator, name):
     """Channels in two groups, each with its own per-edge constants (a vector's components
     share theirs, seed 000 section 2), X-shading and exact mid-edges: the groups' constants
     differ on every triangle, so the channel that took group 0's would leave the 1-LSB
-    bound (the fenney_xz scenes run three groups of three channels)."""
-    params = {**SMALL, "channels": 2, "modes": "exact,xshading", "groups": "0,1"}
+    bound (the fenney_xz scenes run three groups of three channels). With flat words (one
+    model for this test and the next)."""
+    params = GROUPS
     p = make_unit("raster", spec=True, **params).params
     assert [f.name for f in make_unit("raster", spec=True, **params).inputs][6:12] == \
         ["e01", "e02", "e12", "e01_1", "e02_1", "e12_1"]
@@ -117,7 +120,7 @@ def test_flat_words_across_empty_triangles(simulator, name):
     their triangle exactly, across runs of triangles that cover no pixel (sub-pixel, culled,
     off screen: 0, 1, 40 and 300 in a row) with stalls on both sides: the sequence that hung
     the queue that once met the constants beside the raster (16 deep)."""
-    params = {**SMALL, "channels": 1, "flat": 2}
+    params = GROUPS
     p = make_unit("raster", spec=True, **params).params
     rng = np.random.default_rng(11)
     parts = []
