@@ -157,8 +157,9 @@ def test_small_scene_rtl_matches_model(simulator, name, tmp_path):
     ("default", {"mesh": {"segments": [96, 64]}}),
     ("default", {"camera": {"eye": [0.0, -35.0, 25.0]}, "image": {"width": 48, "height": 48}}),
     ("linear", {"mesh": {"segments": [96, 64]}}),
+    ("exact", {"camera": {"eye": [0.0, -35.0, 25.0]}, "image": {"width": 48, "height": 48}}),
     ("phong", {"camera": {"eye": [0.0, -35.0, 25.0]}, "image": {"width": 48, "height": 48}})],
-    ids=["xshading-dense", "xshading-far", "linear-dense", "phong-far"])
+    ids=["xshading-dense", "xshading-far", "linear-dense", "exact-far", "phong-far"])
 def test_dense_scenes_render(scene, tables):
     """Dense meshes (runs of triangles that cover no pixel: sub-pixel ones, and a torus seen
     from far away) through each shading method's pipeline on the batch path, at 64 x 64
