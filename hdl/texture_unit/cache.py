@@ -63,7 +63,7 @@ def texel_cache(m, i, v, o, reqs, resps, *, banks, lines, line, ways, bank_texel
     slot_bits = max(1, _log2(lines))
     v = dict(v)
     lnum = [v.pop(f"_ln{k}")[:_log2(bank_texels) - lb] for k in range(banks)]
-    offs = [v.pop(f"_off{k}") for k in range(banks)]
+    offs = [v.pop(f"_off{k}", Const(0, 1)) for k in range(banks)]
 
     # ---- tags: a memory per bank and way, (valid, tag) per set; cleared after a reset
     clearing, sweep = Signal(init=1), Signal(max(1, sb))

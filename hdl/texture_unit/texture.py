@@ -62,14 +62,16 @@ def filter_stages(filter):
 
 
 def lines(p, v, s, t, size, filter, line):
-    """Each bank's line number ``_ln<k>`` and the texel's place in it ``_off<k>`` at the
+    """Each bank's line number ``_ln<k>`` and the texel's place in it ``_off<k>`` (none for
+    lines of one texel) at the
     coordinates ``s``, ``t`` (keys, consumed), in ``address_stages(filter)`` stages; with
     bilinear, the weights ``_fs``, ``_ft`` and the footprint's parities ``_ps``, ``_pt``."""
     b, lb = size.bit_length() - 1, line.bit_length() - 1
     top = VALUE.frac_bits
+    place = lambda k, c: {f"_off{k}": c[:lb]} if lb else {}    # a line of one: no place
     if filter == "nearest":
         si, ti = v.pop(s)[top - b:top], v.pop(t)[top - b:top]
-        return p.stage(v, _ln0=Cat(si[lb:], ti), _off0=si[:lb])
+        return p.stage(v, _ln0=Cat(si[lb:], ti), **place(0, si))
     F = weight_bits(b)
     half = 1 << (top - b - 1)
     new = {}
@@ -86,7 +88,7 @@ def lines(p, v, s, t, size, filter, line):
         for a in (0, 1):
             sa = Mux(v["_s0"][0] == a, v["_s0"], v["_s1"])[1:]
             new[f"_ln{2 * c + a}"] = Cat(sa[lb:], tc)
-            new[f"_off{2 * c + a}"] = sa[:lb]
+            new.update(place(2 * c + a, sa))
     new.update(_ps=v.pop("_s0")[0], _pt=v.pop("_t0")[0])
     v.pop("_s1"), v.pop("_t1")
     return p.stage(v, **new)
