@@ -2,7 +2,8 @@
 
 A stage subclasses :class:`Stage` and supplies
 
-- ``wanted(q)``: whether a scene (the pipeline's parameters ``q``) calls for it;
+- ``when`` (the parameters' values that call for it), or ``wanted(q)``: whether a scene
+  (the pipeline's parameters ``q``) calls for it;
 - ``name``: its submodule's name in the composed top, and its unit's in ``metrics.json``;
 - ``channels``: the raster channels it reads, ``(name, mode, group)``;
   ``flat``: the names of the flat words (a triangle's constants) it reads from the raster;
@@ -47,9 +48,17 @@ class Stage:
     def __init__(self, q):
         self.q = q
 
+    when = {}              # the parameters' values that call for the stage (all of them)
+
     @classmethod
     def wanted(cls, q):
-        raise NotImplementedError
+        """Whether a scene (the pipeline's parameters ``q``) calls for the stage."""
+        return all(q[k] == v for k, v in cls.when.items())
+
+    @property
+    def lanes(self):
+        """The bump stages' lanes: ``(vector, light)``, L per light and, with specular, H."""
+        return lanes(self.q)
 
     def validate(self, q):
         """Checks on the scene beyond the parameters' ranges."""

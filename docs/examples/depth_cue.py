@@ -14,13 +14,10 @@ class DepthCue(Stage):
     name = "depth_cue"
     why = "an example: the colour times the gain the depth gives"
     uniforms = (NEAR,)
+    when = {}                            # which scenes call for it: every one
 
     def uniform_values(self, scene, L, H):
         return {"cue_near": 255}
-
-    @classmethod
-    def wanted(cls, q):
-        return True
 
     @property
     def latency(self):

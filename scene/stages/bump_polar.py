@@ -19,10 +19,7 @@ class BumpPolar(Stage):
     bump = True
     name = "bump_polar"
     channels = (("phin", "linear", 0), ("thetan", "linear", 0), ("psi", "linear", 0))
-
-    @classmethod
-    def wanted(cls, q):
-        return q["bump"] == "angular"
+    when = {"bump": "angular"}
 
     @property
     def uniforms(self):

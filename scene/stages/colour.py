@@ -13,10 +13,6 @@ class Colour(Stage):
     name = "colour"
     why = "material, lights"
 
-    @classmethod
-    def wanted(cls, q):
-        return True
-
     @property
     def params(self):
         return dict(lights=self.q["lights"], specular=self.q["specular"])

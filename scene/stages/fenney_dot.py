@@ -8,20 +8,13 @@ from hdl.illum_unit.fenney_dot import FenneyDot as Unit, dot_lanes
 from hdl.setup_unit.formats import VALUE
 from amaranth.hdl import Cat, Const, Mux
 
-from ..stage import Stage, lane_key, lanes, raw
+from ..stage import Stage, lane_key, raw
 
 
 class FenneyDot(Stage):
     bump = True
     name = "fenney_dot"
-
-    @classmethod
-    def wanted(cls, q):
-        return q["bump"] == "fenney_xz"
-
-    @property
-    def lanes(self):
-        return lanes(self.q)
+    when = {"bump": "fenney_xz"}
 
     @property
     def channels(self):

@@ -8,7 +8,7 @@ from golden import fenney
 from hdl.illum_unit.fenney_polar import FenneyPolar as Unit, polar_lanes
 from hdl.setup_unit.formats import VALUE
 
-from ..stage import Stage, lane_key, lanes
+from ..stage import Stage, lane_key
 
 CONSTANTS = ("k1", "k2", "k3", "q")     # a flat word, k1 at the top, 8 bits each
 
@@ -21,14 +21,7 @@ def pack(consts):
 class FenneyPolar(Stage):
     bump = True
     name = "fenney_polar"
-
-    @classmethod
-    def wanted(cls, q):
-        return q["bump"] == "fenney_polar"
-
-    @property
-    def lanes(self):
-        return lanes(self.q)
+    when = {"bump": "fenney_polar"}
 
     @property
     def flat(self):

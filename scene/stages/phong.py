@@ -14,10 +14,7 @@ class Phong(Stage):
     name = "phong"
     channels = tuple((f"n{a}", "linear", 0) for a in "xyz")
     why = "shading.method = phong"
-
-    @classmethod
-    def wanted(cls, q):
-        return q["method"] == "phong"
+    when = {"method": "phong"}
 
     @property
     def params(self):

@@ -14,10 +14,6 @@ from ..stage import Stage
 class Raster(Stage):
     name = "raster"
 
-    @classmethod
-    def wanted(cls, q):
-        return True
-
     @property
     def channels(self):
         """Its own: depth, and the shading method's N.L and N.H per light where no bump

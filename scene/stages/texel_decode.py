@@ -9,10 +9,7 @@ class TexelDecode(Stage):
     bump = True
     name = "texel_decode"
     why = "bump.method = fenney_xz"
-
-    @classmethod
-    def wanted(cls, q):
-        return q["bump"] == "fenney_xz"
+    when = {"bump": "fenney_xz"}
 
     @property
     def latency(self):
