@@ -90,6 +90,7 @@ bench: setup
 # 100,000 triangles through raster.
 soak: setup
 	$(PY) -m sim.soak
+	$(PY) -m pytest -m long -n $(JOBS) --dist loadgroup
 
 clean:
 	rm -rf build .pytest_cache .hypothesis results.xml sim_build
