@@ -276,7 +276,8 @@ def test_angular_flat_map_gives_the_unbumped_surface():
 
 @VERILATOR
 @ONE_MODEL
-@pytest.mark.parametrize("latency,mem_ready", [(1, 1.0), (40, 0.5), (17, 0.9)])
+@pytest.mark.parametrize("latency,mem_ready", [(1, 1.0), (40, 0.5),
+                                               pytest.param(17, 0.9, marks=pytest.mark.long)])
 def test_polar_scene_under_backpressure(latency, mem_ready):
     """Random gaps on the input, stalls on the output, and a texture memory of 1, 17 or 40
     clocks that stalls at random on both of its streams: the same fragments as with nothing
@@ -400,10 +401,13 @@ def _same_fragments(prep, out):
 @VERILATOR
 @pytest.mark.parametrize("bump,tables", [
     pytest.param({"method": "fenney_polar"}, DENSE, id="polar-dense", marks=ONE_MODEL),
-    pytest.param({"method": "fenney_polar"}, FAR, id="polar-far", marks=ONE_MODEL),
-    pytest.param({"method": "fenney_xz"}, DENSE, id="xz-dense", marks=XZ_NEAREST),
+    # the rest in make soak (marked long): make test keeps the scene that hung
+    pytest.param({"method": "fenney_polar"}, FAR, id="polar-far",
+                 marks=[ONE_MODEL, pytest.mark.long]),
+    pytest.param({"method": "fenney_xz"}, DENSE, id="xz-dense",
+                 marks=[XZ_NEAREST, pytest.mark.long]),
     pytest.param({"method": "angular"}, FAR, id="angular-far",
-                 marks=pytest.mark.xdist_group("verilator-scene-angular"))])
+                 marks=[pytest.mark.xdist_group("verilator-scene-angular"), pytest.mark.long])])
 def test_dense_bump_scenes_render(bump, tables):
     """The scenes that hung the pipeline (a dense fenney_polar torus, the default torus far
     away) and their like for every bump method, on the batch path with a slow memory: every
