@@ -7,6 +7,8 @@
 - The bounds the RTL must meet against the float models, derived from its fraction bits and
   its tables (``hdl.lut`` reports each table's error).
 """
+import math
+
 import numpy as np
 
 from hdl.illum_unit import fenney_dot as dot_hw
@@ -152,3 +154,16 @@ def expand8to10(i):
     """The 8-bit intensity widened to the power unit's X by bit replication."""
     i = np.asarray(i, np.int64)
     return (i << 2) | (i >> 6)
+
+
+def concentration_for(n):
+    """The concentration C whose fitted exponent (``power_exponent``, least
+    squares over X = 1..1023) is nearest to n on a log scale. The fitted exponent grows with C,
+    so a bisection finds it; C = 0..255 covers n of about 1 to 300, and n beyond the ends
+    takes the end."""
+    fit = lambda c: math.log(power_exponent(c)[0])
+    lo, hi, target = 0, 255, math.log(n)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if fit(mid) < target else (lo, mid)
+    return min((lo, hi), key=lambda c: abs(fit(c) - target))

@@ -14,7 +14,7 @@ from amaranth.lib.memory import Memory
 
 from .fixed import Fixed
 
-__all__ = ["Lut", "build_lut", "rom", "read_roms"]
+__all__ = ["Lut", "build_lut", "blank_lut", "rom", "read_roms", "WriteBus"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,21 +117,41 @@ def build_lut(fn, addr_bits, fmt, *, domain=None, depth=None, edges=None, oversa
                None if domain is None and edges is None else (lo, hi), err, edges)
 
 
+def blank_lut(depth, fmt):
+    """A table's shape alone (``depth`` entries of ``fmt``, all zero): a RAM that the host
+    loads (the on-chip texture), whose contents are data."""
+    zero = np.zeros(depth, np.int64)
+    return Lut(zero, fmt, 0.0, None, zero.astype(float), None)
+
+
+class WriteBus:
+    """A host's writes into one loaded table: ``en`` (this table's), ``addr``, ``data``
+    (the entry's raw bits at the bottom)."""
+
+    def __init__(self, en, addr, data):
+        self.en, self.addr, self.data = en, Value.cast(addr), Value.cast(data)
+
+
 class RomRead:
     """A table read, to be placed in a :meth:`hdl.unit.Pipeline.stage`: the stage's register
     is the block RAM's own read register (see :func:`read_roms`)."""
 
-    def __init__(self, lut, addr, name):
-        self.lut, self.addr, self.name = lut, Value.cast(addr), name
+    def __init__(self, lut, addr, name, load=None):
+        self.lut, self.addr, self.name, self.load = lut, Value.cast(addr), name, load
 
 
-def rom(lut, addr, name):
+def rom(lut, addr, name, load=None):
     """A read of ``lut`` at ``addr``, for ``p.stage(v, out=rom(...))``: the value is the
     table's read register at the next stage. Register it once more (a plain stage,
     ``v = p.stage(v)``) before any logic, so that the RAM's clock-to-output (5.8 ns on ECP5
     without its output register, which Yosys does not infer) is never in series with logic.
-    ``name`` is made unique within the module."""
-    return RomRead(lut, addr, name)
+    ``name`` is made unique within the module.
+
+    ``load``: the table is scene data (a power table's shininess), named so. Where the
+    pipeline has a host bus of that name (``p.host[load]``, a :class:`WriteBus`) the table is
+    a RAM, empty after configuration, that the host writes; elsewhere (a unit on its own) it
+    is a ROM of ``lut``'s contents. Either way ``lut`` gives its depth and format."""
+    return RomRead(lut, addr, name, load)
 
 
 def slice_width(depth):
@@ -152,13 +172,18 @@ def read_roms(p, reads):
     its register: a table of ``2**k + 1`` entries (both ends of a quarter wave) takes RAMs
     ``2**(k+1)`` deep rather than a mux for its last entry. Returns ``{key: value}``."""
     groups = {}
+    host = getattr(p, "host", {})
     for key, r in reads.items():
-        groups.setdefault(id(r.lut), []).append((key, r))
+        bus = host.get(r.load) if r.load else None
+        # a loaded table: a RAM of its own per read, its one write port the host's (a
+        # block RAM has two ports: one write, one read)
+        groups.setdefault(id(r) if bus else id(r.lut), []).append((key, r))
     out = {}
     for group in groups.values():
         for at in range(0, len(group), 2):
             pair = group[at:at + 2]
             lut = pair[0][1].lut
+            bus = host.get(pair[0][1].load) if pair[0][1].load else None
             stored = np.asarray(lut.contents, np.int64)
             raw = stored & ((1 << lut.fmt.width) - 1)            # two's complement bits
             # deeper than one RAM (a texture): one memory, which Yosys cascades itself
@@ -167,9 +192,13 @@ def read_roms(p, reads):
             mems = []
             for k, lo in enumerate(range(0, lut.fmt.width, step)):
                 bits = min(step, lut.fmt.width - lo)
-                init = [int(v) for v in (raw >> lo) & ((1 << bits) - 1)]
-                mems.append(Memory(shape=bits, depth=len(init), init=init))
+                init = [] if bus else [int(v) for v in (raw >> lo) & ((1 << bits) - 1)]
+                mems.append(Memory(shape=bits, depth=len(stored), init=init))
                 p.m.submodules[name if lut.fmt.width <= step else f"{name}_{k}"] = mems[-1]
+                if bus:
+                    wr = mems[-1].write_port()
+                    p.m.d.comb += [wr.en.eq(bus.en), wr.addr.eq(bus.addr),
+                                   wr.data.eq(bus.data[lo:lo + bits])]
             for key, r in pair:
                 parts = []
                 for mem in mems:

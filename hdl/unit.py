@@ -99,6 +99,7 @@ class Pipeline:
         self.stages = 0
         self._valid = i.valid
         self.valids = []                   # every stage's valid bit: the pipeline is busy if any
+        self.host = {}                     # the loaded tables' write buses (hdl.lut.rom's load)
         self._names = set()
         m.d.comb += [self.en.eq(~o.valid | o.ready), i.ready.eq(self.en)]
 

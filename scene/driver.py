@@ -32,13 +32,14 @@ from hdl.setup_unit.formats import EDGE, VALUE, coord
 from hdl.shade_unit.formats import RGB
 from hdl.texture_unit import MAX_TEXTURE
 
+from . import host
 from .pipeline import BUMPS, METHODS, ScenePipeline, choose
 from .stage import lanes as lanes_of, raw
 from .stages.fenney_polar import pack
 from .stages.texture import ANGLE_BITS
 
-__all__ = ["SceneError", "load", "parse", "prepare", "model", "reference", "framebuffer",
-           "DEFAULTS"]
+__all__ = ["SceneError", "load", "parse", "prepare", "rtl_inputs", "model", "reference",
+           "framebuffer", "DEFAULTS"]
 
 
 class SceneError(ValueError):
@@ -231,16 +232,15 @@ def _unit(v):
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def pipeline_params(scene, bump_size=None):
-    """The pipeline's parameters for a scene (``bump_size``: the map's, where it has its
-    own size)."""
-    img, mat, sh, b = scene["image"], scene["material"], scene["shading"], scene["bump"]
+def pipeline_params(scene, bump_size=None, hardware=None):
+    """The pipeline's parameters for a scene: its effects and sizes (``bump_size``: the
+    map's, where it has its own size), never its data. ``hardware``: parameters chosen for
+    the build rather than by the scene (``texture``, the cache's sizes)."""
+    img, sh, b = scene["image"], scene["shading"], scene["bump"]
     pipe = dict(screen_bits=max(4, (max(img["width"], img["height"]) - 1).bit_length()),
                 sub_bits=ScenePipeline.PARAMS["sub_bits"], method=sh["method"],
                 lights=len(scene["lights"]), specular=sh["specular"], power=sh["power"],
-                shininess=mat["shininess"])
-    if sh["power"] == "fenney" and sh["specular"]:
-        pipe["concentration"] = fenney_concentration(mat["shininess"])
+                **(hardware or {}))
     if b["method"] != "none":
         pipe.update(bump=b["method"], bump_size=bump_size or b["size"], filter=b["filter"])
         if b["method"] == "angular":
@@ -248,11 +248,12 @@ def pipeline_params(scene, bump_size=None):
     return {**ScenePipeline.PARAMS, **pipe}
 
 
-def prepare(scene):
-    """Everything the hardware and the models take; see the module's docstring."""
+def prepare(scene, hardware=None):
+    """Everything the hardware and the models take; see the module's docstring.
+    ``hardware``: build parameters (``pipeline_params``)."""
     img, cam = scene["image"], scene["camera"]
     W, H = img["width"], img["height"]
-    pipe = pipeline_params(scene)
+    pipe = pipeline_params(scene, hardware=hardware)
     screen_bits, sub_bits = pipe["screen_bits"], pipe["sub_bits"]
     pos, nrm, tris = mesh(scene)
     eye = np.array(cam["eye"])
@@ -309,18 +310,29 @@ def prepare(scene):
                                    else ()):   # a lane's constants, its flat word
             inputs[f"f{n}"] = pack({c: bump["constants"][f"{t}{k}_{c}"]
                                     for c in ("k1", "k2", "k3", "q")})
-    # uniforms: each stage's registers from the scene (the lights' L and H, unit vectors)
-    uni = {}
+    # the data, which the host port loads (scene/host.py): each stage's registers from the
+    # scene (the lights' L and H, unit vectors), its tables, the texture's words
+    uni, tables = {}, {}
     for stage in spec.stages:
         uni.update(stage.uniform_values(scene, Ls, Hs))
-    uni = {f.name: int(uni[f.name]) for f in spec.uniforms}
-    image = [s.image for s in spec.stages if hasattr(s, "image")]
+        tables.update({(stage.name, k): v for k, v in stage.table_values(scene).items()})
+    uni = {f.name: int(uni[f.name]) for f in spec.registers}
+    texture = [s for s in spec.stages if hasattr(s, "image")]
+    image = texture[0].image({"bump": bump}) if texture else None
+    onchip = bool(texture) and texture[0].onchip
     return {"scene": scene, "params": pipe, "pipeline": spec, "inputs": inputs,
-            "memory": image[0]({"bump": bump}) if image else None,
+            "memory": None if onchip else image,
+            "load": host.writes(spec, uni, tables, image if onchip else None),
             "uniforms": uni, "size": (W, H),
             "triangles": {"in": len(tris), "culled": int((~keep).sum()), "drawn": len(drawn)},
             "float": {"sx": sx[drawn], "sy": sy[drawn], "inv_z": zmin / zc[drawn],
                       "N": N[drawn], "L": Ls, "H": Hs}, "bump": bump}
+
+
+def rtl_inputs(prep, at=None):
+    """The rows of the pipeline's input stream: the scene's data (``prep["load"]``), then its
+    triangles; ``at``: further writes between triangles (``scene.host.stream``)."""
+    return host.stream(prep["inputs"], prep["load"], at)
 
 
 def _bump(scene, drawn, Ls, Hs, pipe):
@@ -416,19 +428,6 @@ def _bump(scene, drawn, Ls, Hs, pipe):
         consts[f"{t}{k}_q"] = np.rint(rot / (2 * np.pi) * 256).astype(np.int64) % 256
     out["S"], out["R"] = hi, lo
     return out
-
-
-def fenney_concentration(n):
-    """The concentration C whose fitted exponent (``golden.fenney.power_exponent``, least
-    squares over X = 1..1023) is nearest to n on a log scale. The fitted exponent grows with C,
-    so a bisection finds it; C = 0..255 covers n of about 1 to 300, and n beyond the ends
-    takes the end."""
-    fit = lambda c: math.log(fenney.power_exponent(c)[0])
-    lo, hi, target = 0, 255, math.log(n)
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        lo, hi = (mid, hi) if fit(mid) < target else (lo, mid)
-    return min((lo, hi), key=lambda c: abs(fit(c) - target))
 
 
 # ---- images ----------------------------------------------------------------------------------

@@ -11,12 +11,14 @@ next by an ``amaranth.lib.stream`` (``wiring.connect``).
 ``STAGES`` is the one place where the stages are chosen: each says itself whether a scene
 wants it (``scene/stages/``, one file each; README "Adding an effect"). The raster's
 channels are the ones its stages read, in the order of the list, depth first; its flat words
-are theirs too. Lights and material colours are uniforms: ports ``u_<field>``, which a host
-sets before it streams triangles. The depth test and the framebuffer are not here: they model
+are theirs too. A scene's data is written at run time through the host port, rows of the
+input stream beside the triangles (``scene/host.py``): lights, material colours and the
+concentration into registers, the power tables and the on-chip texture into RAMs. So the
+hardware depends only on the effects and the sizes, never on the data. The depth test and the framebuffer are not here: they model
 external memory (a 256 x 256 frame with depth is 2.6 Mbit, more than the 1 Mbit of block RAM
 of an ECP5-25F), and the renderer keeps them.
 """
-from amaranth.hdl import Cat, Module
+from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
@@ -29,6 +31,7 @@ from hdl.texture_unit import FILTERS, MAX_TEXTURE
 from hdl.unit import Unit
 from hdl.units import PIPELINES
 
+from . import host
 from .stage import StageUnit
 from .stages.bump_polar import BumpPolar
 from .stages.colour import Colour
@@ -38,7 +41,7 @@ from .stages.phong import Phong
 from .stages.power import Power
 from .stages.raster import Raster
 from .stages.texel_decode import TexelDecode
-from .stages.texture import Texture
+from .stages.texture import MEMORIES, Texture
 
 __all__ = ["ScenePipeline", "STAGES", "METHODS", "BUMPS", "choose", "units_in"]
 
@@ -52,20 +55,21 @@ SOURCE = {"x": "_pix_x", "y": "_pix_y"}          # the fragment's pixel, as the 
 class ScenePipeline(Unit):
     NAME = "scene"
     DOC = "A scene's pipeline: raster -> (bump stages) -> (phong) -> (power) -> colour"
-    # Its parameters are the effects and the sizes; a bump map is data (the texture memory's
-    # image), so two scenes that differ only in their maps share one Verilog and one model.
+    # Its parameters are the effects and the sizes; a scene's data (lights, material, tables,
+    # the bump map) is loaded through the host port, so two scenes that differ only in their
+    # data share one Verilog and one model.
     PARAMS = {"screen_bits": 8, "sub_bits": 4, "method": "xshading", "lights": 1,
-              "specular": True, "power": "table", "shininess": 32.0, "mant_bits": 6,
-              "concentration": 64, "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
-              "bump": "none", "bump_size": 256,
+              "specular": True, "power": "table", "mant_bits": 6,
+              "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
+              "bump": "none", "bump_size": 256, "texture": "external",
               "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
               "rsqrt_bits": 12,
               # the texel cache (per bank: lines, texels a line, ways) and its queue
               "cache_lines": 64, "cache_line": 1, "cache_ways": 2, "tex_queue": 64,
               "bank_ports": True}   # a memory port per bank (bilinear: 4), or one shared
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
-              "power": ("table", "fenney"), "shininess": (1.0, 1e9), "mant_bits": (3, 8),
-              "concentration": (0, 255), "recip": ("newton", "divide"), "recip_iters": (0, 3),
+              "power": ("table", "fenney"), "mant_bits": (3, 8), "texture": MEMORIES,
+              "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "rsqrt_iters": (1, 3), "bump": BUMPS,
               "bump_size": (16, MAX_TEXTURE), "filter": FILTERS,
               "trig_bits": (4, 16), "rotation": ("paper", "exact"),
@@ -75,8 +79,11 @@ class ScenePipeline(Unit):
         self.stages = choose(q)
         self.stream_ports = {name: port for s in self.stages for name, port in s.ports.items()}
         # held: a bit per stage (the raster's first), set while it holds data; a hang's
-        # message names the stages that held it
-        self.status_ports = {"busy": Out(1), "culled": Out(32), "held": Out(len(self.stages))}
+        # message names the stages that held it. loading: clocks with a write at the head
+        self.status_ports = {"busy": Out(1), "culled": Out(32), "held": Out(len(self.stages)),
+                             "loading": Out(32)}
+        self.table_bases = {(s.name, key): base
+                            for base, s, key, _ in host.tables(self.stages)}
 
     @property
     def raster(self):
@@ -96,10 +103,14 @@ class ScenePipeline(Unit):
 
     @property
     def inputs(self):
-        return list(self.raster.unit.inputs)
+        """A triangle's fields and a write's (``scene/host.py``), one row."""
+        return list(self.raster.unit.inputs) + list(host.FIELDS)
+
+    uniforms = ()          # no ports: the stages' uniforms are registers behind the host port
 
     @property
-    def uniforms(self):
+    def registers(self):
+        """The registers the host writes, in address order: every stage's uniforms."""
         seen, out = set(), []
         for stage in self.stages:
             out += [f for f in stage.uniforms if f.name not in seen]
@@ -124,25 +135,44 @@ class ScenePipeline(Unit):
     def elaborate(self, platform):
         m = Module()
         m.submodules.raster = raster = RasterUnit(**self.raster.params)
-        wiring.connect(m, wiring.flipped(self.i), raster.i)
+        # the host port (scene/host.py): a write waits at the head until the pipeline is
+        # empty, then is registered; triangles go on to the raster
+        drained, write = Signal(), self.i.payload.cmd
+        m.d.comb += [raster.i.valid.eq(self.i.valid & ~write),
+                     self.i.ready.eq(Mux(write, drained, raster.i.ready))]
+        m.d.comb += [raster.i.payload[f.name].eq(self.i.payload[f.name])
+                     for f in raster.inputs]
+        w = w_en, w_addr, w_data = host.write_signals()
+        m.d.sync += [w_en.eq(self.i.valid & write & drained), w_addr.eq(self.i.payload.addr),
+                     w_data.eq(self.i.payload.data)]
+        with m.If(self.i.valid & write):
+            m.d.sync += self.loading.eq(self.loading + 1)
+        regs = {}
+        for k, f in enumerate(self.registers):
+            regs[f.name] = reg = Signal(f.fmt.shape, name=f"r_{f.name}")
+            with m.If(w_en & host.equals(w_addr, host.REGISTERS + k)):
+                m.d.sync += reg.eq(w_data[:f.fmt.width])
         last, rename, busy = raster.o, self.raster.rename(), raster.busy
         held = [raster.busy]
         rest = self.stages[1:]
         for k, stage in enumerate(rest):          # the last gives the fragment's fields
             out = self.outputs if stage is rest[-1] else None
-            unit = StageUnit(stage, last.payload.shape(), out, rename, source=SOURCE)
+            unit = StageUnit(stage, last.payload.shape(), out, rename, source=SOURCE,
+                             bases={key: base for (name, key), base in self.table_bases.items()
+                                    if name == stage.name})
             m.submodules[stage.name] = unit
             wiring.connect(m, last, unit.i)
-            m.d.comb += [getattr(unit, f"u_{f.name}").eq(getattr(self, f"u_{f.name}"))
-                         for f in stage.uniforms]
+            m.d.comb += [getattr(unit, f"u_{f.name}").eq(regs[f.name]) for f in stage.uniforms]
+            if stage.tables:
+                m.d.comb += [getattr(unit, s.name).eq(s) for s in w]
             for name in stage.ports:                    # the memory port, the top's own
                 wiring.connect(m, wiring.flipped(getattr(self, name)), getattr(unit, name))
             busy = busy | unit.busy
             held.append(unit.busy)
             last, rename = unit.o, None
         wiring.connect(m, last, wiring.flipped(self.o))
-        m.d.comb += [self.busy.eq(busy), self.culled.eq(raster.culled),
-                     self.held.eq(Cat(*held))]
+        m.d.comb += [drained.eq(~busy), self.busy.eq(busy | w_en),
+                     self.culled.eq(raster.culled), self.held.eq(Cat(*held))]
         return m
 
 

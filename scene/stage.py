@@ -7,16 +7,19 @@ A stage subclasses :class:`Stage` and supplies
 - ``name``: its submodule's name in the composed top, and its unit's in ``metrics.json``;
 - ``channels``: the raster channels it reads, ``(name, mode, group)``;
   ``flat``: the names of the flat words (a triangle's constants) it reads from the raster;
-- ``uniforms``: the registers it reads (``u_<field>`` ports of the top), and
+- ``uniforms``: the registers it reads (the host writes them: ``scene/host.py``), and
   ``uniform_values(scene, L, H)``: their raw values for a scene (``L``, ``H``: each light's
   unit vectors, world frame);
+- ``tables``: the RAMs the host loads (``{key: lut}``, the lut giving depth and format; the
+  key ``texture`` is the on-chip texture), and ``table_values(scene)``: their contents;
 - ``params``: its unit's parameters, from the scene's; ``why``: the scene key that calls for it;
 - ``validate(q)``: its checks on the scene, raising ``ValueError`` that names the scene key;
 - ``latency``: its register stages, from its units;
 - ``rtl(p, v, uni)``: its stages on the :class:`hdl.unit.Pipeline` ``p``, from the values
   ``v`` of the stage before it (named as the stages name them); returns the values after it.
   A stage whose latency varies (a memory read) has ``build`` instead, with handshakes of its
-  own, and ``ports``: the streams it adds to the top (its memory port);
+  own, and ``ports``: the streams it adds to the top (its memory port); ``host``: the loaded
+  tables' write buses (``hdl.lut.WriteBus``), by key;
 - ``model(prep, frag, ch, bound)``: the same step in the float or integer model, on numpy
   arrays per fragment; ``bound``: the tests' offsets, each stage takes the ones it knows.
 
@@ -32,6 +35,8 @@ from amaranth.lib.wiring import In, Out
 from hdl.fixed import layout
 from hdl.setup_unit.formats import VALUE
 from hdl.unit import Pipeline
+
+from . import host as hostport
 
 __all__ = ["Stage", "StageUnit", "Link", "lanes", "lane_key", "raw"]
 
@@ -66,6 +71,12 @@ class Stage:
     def uniform_values(self, scene, L, H):
         return {}
 
+    tables = {}            # key: lut (its shape): the RAMs the host loads
+
+    def table_values(self, scene):
+        """The loaded tables' contents for a scene: ``{key: raw integers}``."""
+        return {}
+
     @property
     def latency(self):
         raise NotImplementedError
@@ -75,11 +86,12 @@ class Stage:
     def rtl(self, p, v, uni):
         raise NotImplementedError
 
-    def build(self, m, i, o, v, uni, ports):
+    def build(self, m, i, o, v, uni, ports, host):
         """The stage's logic between the handshakes ``i`` and ``o`` (``Link``s); returns
         ``(values, busy)``. By default its ``rtl`` on one shared-enable pipeline, whose
-        stages must be its ``latency``."""
+        stages must be its ``latency``, its tables loaded from ``host``."""
         p = Pipeline(m, i, o)
+        p.host = host
         v = self.rtl(p, v, uni)
         if p.stages != self.latency:
             raise AssertionError(f"stage {self.name} has {p.stages} stages, its latency says "
@@ -110,22 +122,31 @@ class StageUnit(wiring.Component):
     """A stage as a component: ``i`` (the layout ``layout_in``, its fields renamed by
     ``rename`` on the way in: the raster's ``v<k>`` are the channels' names) and ``o`` (the
     values the stage gives; where it is the last one, ``out_fields`` in their order, each
-    from the value ``source`` names), and a port ``u_<name>`` per uniform. The datapath is
-    built here, so the output layout is known; ``elaborate`` joins it to the ports.
+    from the value ``source`` names), a port ``u_<name>`` per uniform (the top's register) and,
+    for a stage with loaded tables, the host's registered write ``w_en``, ``w_addr``,
+    ``w_data`` (``scene/host.py``; ``bases``: each table's address). The datapath is built
+    here, so the output layout is known; ``elaborate`` joins it to the ports.
     ``busy``: data in the stage."""
 
-    def __init__(self, stage, layout_in, out_fields=None, rename=None, source=None):
+    def __init__(self, stage, layout_in, out_fields=None, rename=None, source=None,
+                 bases=None):
         self.stage = stage
         self._m = m = Module()
         self._in = {name: Signal(f.shape, name=f"i_{name}") for name, f in layout_in}
         self._uni = {f.name: Signal(f.fmt.shape, name=f"u_{f.name}") for f in stage.uniforms}
+        self._w = hostport.write_signals() if stage.tables else ()
+        buses = {}
+        if self._w:
+            buses = hostport.table_buses(*self._w, {k: b for k, b in (bases or {}).items()})
+            if "texture" in stage.tables:
+                buses["texture"] = hostport.texture_bus(*self._w)
         self._li, self._lo = Link(), Link()
         self._ports = {name: (stream.Signature(layout(fields)) if d is Out else
                               stream.Signature(layout(fields)).flip()).create(path=(name,))
                        for name, (d, fields) in stage.ports.items()}
         v, self.busy = stage.build(m, self._li, self._lo,
                                    {(rename or {}).get(k, k): x for k, x in self._in.items()},
-                                   self._uni, self._ports)
+                                   self._uni, self._ports, buses)
         if out_fields is not None:
             source = source or {}
             v = {f.name: Value.cast(v[source.get(f.name, f.name)]) for f in out_fields}
@@ -136,6 +157,7 @@ class StageUnit(wiring.Component):
         super().__init__({"i": In(stream.Signature(layout_in)),
                           "o": Out(stream.Signature(layout_out)),
                           **{f"u_{k}": In(s.shape()) for k, s in self._uni.items()},
+                          **{s.name: In(s.shape()) for s in self._w},
                           **{name: d(stream.Signature(layout(fields)))
                              for name, (d, fields) in stage.ports.items()}})
 
@@ -148,6 +170,7 @@ class StageUnit(wiring.Component):
         m.d.comb += [s.eq(self.i.payload[k]) for k, s in self._in.items()]
         m.d.comb += [self.o.payload[k].eq(x) for k, x in self._out.items()]
         m.d.comb += [s.eq(getattr(self, f"u_{k}")) for k, s in self._uni.items()]
+        m.d.comb += [s.eq(getattr(self, s.name)) for s in self._w]
         return m
 
 

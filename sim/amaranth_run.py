@@ -1,7 +1,7 @@
 """Streaming vectors through a unit in Amaranth's simulator."""
 from amaranth.sim import Simulator
 
-from .stream import Traffic, memory_ports, pack, unpack
+from .stream import COUNTERS, Traffic, memory_ports, pack, timed_rows, unpack
 
 
 def fields_of(unit):
@@ -15,7 +15,7 @@ def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, pr
     fin, fout = fields_of(unit)
     many = hasattr(unit, "busy")
     traffic = Traffic(pack(fin, inputs), p_valid=p_valid, p_ready=p_ready, seed=seed,
-                      progress=progress, many=many)
+                      progress=progress, many=many, timed=timed_rows(inputs))
     i_raw, o_raw = unit.i.payload.as_value(), unit.o.payload.as_value()
     busy = unit.busy if many else unit.o.valid
 
@@ -43,7 +43,8 @@ def run_amaranth(unit, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, vcd=None, pr
                 b = b or mem.busy
             traffic.edge(i_ready, o_valid, o_payload, b)
         if many:
-            traffic.status = {"culled": ctx.get(unit.culled)}
+            traffic.status = {k: ctx.get(getattr(unit, k)) for k in COUNTERS
+                              if k in unit.status_ports}
             if mems:
                 traffic.status["memory_reads"] = sum(mem.reads for mem in mems)
 

@@ -50,11 +50,11 @@ def build_seconds(name, params, simulator):
     return float(path.read_text()) if path.exists() else None
 
 
-def measure(name, params, simulator, inputs, uniforms=None, label=None):
+def measure(name, params, simulator, inputs, label=None):
     unit = make_unit(name, spec=True, **params)
     seconds_build = build_seconds(name, params, simulator)        # builds it if need be
     t0 = time.perf_counter()
-    out, info = simulate(name, unit.params, inputs, simulator, uniforms=uniforms)
+    out, info = simulate(name, unit.params, inputs, simulator)
     seconds = time.perf_counter() - t0
     items = len(out["tri"]) if unit.status_ports else len(next(iter(out.values())))
     return {"unit": label or name, "simulator": simulator, "rows_in": len(next(iter(inputs.values()))),
@@ -103,6 +103,7 @@ def scene_rows(sims, triangles):
     path (the scene repeated up to ``triangles``), the first few on the others (fragments per
     second either way)."""
     from scene.driver import load, prepare
+    from scene.host import stream
     prep = prepare(load(SCENE))
     full = make_unit("scene", spec=True, **prep["params"]).params     # the key of its model
     rows = []
@@ -114,7 +115,8 @@ def scene_rows(sims, triangles):
             inputs = {k: np.tile(v, reps) for k, v in inputs.items()}
         print(f"scene_default on {sim}: {len(next(iter(inputs.values()))):,} triangles",
               file=sys.stderr, flush=True)
-        rows.append(measure("scene", full, sim, inputs, prep["uniforms"], "scene_default"))
+        rows.append(measure("scene", full, sim, stream(inputs, prep["load"]),
+                            label="scene_default"))
     return rows
 
 

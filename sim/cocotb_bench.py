@@ -16,7 +16,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge
 
 from sim.progress import report_to
-from sim.stream import Memory, Traffic
+from sim.stream import COUNTERS, Memory, Traffic, timed_rows
 
 
 @cocotb.test()
@@ -29,7 +29,8 @@ async def stream_vectors(dut):
     rows = list(zip(*cols))
     traffic = Traffic(list(range(len(rows))), p_valid=spec["p_valid"], p_ready=spec["p_ready"],
                       seed=spec["seed"], many=spec["many"],
-                      progress=report_to(os.environ["SHADE_PROGRESS"]))
+                      progress=report_to(os.environ["SHADE_PROGRESS"]),
+                      timed=timed_rows({f["name"]: c for f, c in zip(fin, cols)}))
     busy = dut.busy if spec["many"] else None
     mems = []
     if "memory" in spec:                             # the texture memory behind the ports
@@ -83,7 +84,7 @@ async def stream_vectors(dut):
         if f["signed"]:
             col = np.where(col >> (f["width"] - 1) & 1, col - (1 << f["width"]), col)
         out[f["name"]] = col
-    status = {"culled": int(dut.culled.value)} if spec["many"] else {}
+    status = {k: int(getattr(dut, k).value) for k in COUNTERS if k in spec.get("status", ())}
     if mems:
         status["memory_reads"] = sum(mem.reads for mem in mems)
     np.savez(os.environ["SHADE_OUT"], latency=traffic.latency if traffic.latency is not None

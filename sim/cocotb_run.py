@@ -108,7 +108,7 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
     spec = {"inputs": [f.describe() for f in unit.inputs],
             "outputs": [f.describe() for f in unit.outputs],
             "p_valid": p_valid, "p_ready": p_ready, "seed": seed,
-            "many": bool(unit.status_ports),
+            "many": bool(unit.status_ports), "status": list(unit.status_ports),
             "uniforms": [{**f.describe(), "value": int(uniforms[f.name])} for f in unit.uniforms]}
     if memory is not None:
         from .stream import memory_ports
@@ -149,7 +149,7 @@ def run_cocotb(name, params, inputs, simulator, *, p_valid=1.0, p_ready=1.0, see
                 wave.parent.mkdir(parents=True, exist_ok=True)
                 shutil.move(found[0], wave)
     info = {"latency": int(got.pop("latency")), "cycles": int(got.pop("cycles")), "waves": wave}
-    for k in ("culled", "memory_reads"):
+    for k in ("culled", "loading", "memory_reads"):
         if k in got:
             info[k] = int(got.pop(k))
     return got, info

@@ -82,10 +82,7 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
         scene = S.parse({k: v for k, v in scene.items() if k != "name"}, scene["name"])
     out_dir = Path(out_dir or BUILD / "render" / scene["name"])
     out_dir.mkdir(parents=True, exist_ok=True)
-    prep = S.prepare(scene)
-    if hardware:
-        prep["params"] = {**prep["params"], **hardware}
-        prep["pipeline"] = make_unit("scene", spec=True, **prep["params"])
+    prep = S.prepare(scene, hardware)
     pipe, params = prep["pipeline"], prep["params"]
     if simulator == "verilator":                # build (or find) the model before timing
         from .batch import build
@@ -96,8 +93,7 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     t0 = time.time()
     memory = None if prep["memory"] is None else \
         Memory(prep["memory"], latency=mem_latency, p_ready=mem_ready)
-    frags, info = simulate("scene", params, prep["inputs"], simulator,
-                           uniforms=prep["uniforms"], memory=memory,
+    frags, info = simulate("scene", params, S.rtl_inputs(prep), simulator, memory=memory,
                            progress=None if quiet else f"scene {scene['name']}")
     wall = time.time() - t0
     rgb = np.stack([frags[c] for c in "rgb"], -1).astype(np.uint8)
@@ -130,10 +126,11 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
                               "words_per_fragment": round(info["memory_reads"] / n, 4)
                               if n and info.get("memory_reads") is not None else None}}
                   if memory is not None else {}),
+               "load": {"words": len(prep["load"][0]), "cycles": info.get("loading")},
                "latency": info["latency"], "rtl_wall_s": round(wall, 3),
                "sim_px_per_s": round(n / wall, 1) if wall > 0 else None,
                "pipeline": {"params": params, "latency": pipe.latency,
-                            "uniforms": prep["uniforms"]},
+                            "registers": prep["uniforms"]},
                "units": units,
                "rtl_vs_model": compare(rtl, cov, model, mcov),
                "rtl_vs_reference": {**{k: vs_ref[k] for k in ("psnr_db", "max_abs",

@@ -9,7 +9,17 @@ import random
 
 import numpy as np
 
-__all__ = ["pack", "unpack", "Traffic", "StreamError", "Memory", "memory_ports"]
+COUNTERS = ("culled", "loading")     # a scene pipeline's status counters, read at the end
+
+
+def timed_rows(inputs):
+    """Which rows start the latency: every row, or (a scene pipeline's stream, with host
+    writes) the triangles, ``cmd = 0``."""
+    return None if "cmd" not in inputs else [c == 0 for c in inputs["cmd"]]
+
+
+__all__ = ["pack", "unpack", "Traffic", "StreamError", "Memory", "memory_ports", "COUNTERS",
+           "timed_rows"]
 
 
 class StreamError(RuntimeError):
@@ -51,7 +61,7 @@ class Traffic:
     """
 
     def __init__(self, words, *, p_valid=1.0, p_ready=1.0, seed=0, max_cycles=None,
-                 progress=None, many=False):
+                 progress=None, many=False, timed=None):
         self.words = words
         self.many = many                  # outputs per input vary: done when idle (``busy`` low)
         self.busy = True
@@ -65,6 +75,7 @@ class Traffic:
         self.out = []
         self.cycles = 0
         self.first_in = self.first_out = None
+        self.timed = timed                # per row: whether it starts the latency (not a write)
         self.max_cycles = max_cycles or (64 + 4 * len(words) / max(1e-3, p_valid * p_ready))
 
     @property
@@ -85,7 +96,7 @@ class Traffic:
         taken = self.valid and i_ready
         moved = taken or (o_valid and self.ready)
         if self.valid and i_ready:
-            if self.first_in is None:
+            if self.first_in is None and (self.timed is None or self.timed[self.sent]):
                 self.first_in = self.cycles
             self.sent += 1
             self.valid = False
@@ -108,7 +119,8 @@ class Traffic:
 
     @property
     def latency(self):
-        """Cycles from the first accepted input to the first output (ready held high)."""
+        """Cycles from the first accepted input (``timed``: the first accepted triangle, not a
+        host write) to the first output (ready held high)."""
         return None if self.first_out is None else self.first_out - self.first_in
 
 

@@ -283,8 +283,8 @@ def _unit_error(unit, simulator):
     if name == "raster":
         inputs = random_triangles(rng, n, **params, size=TYPICAL_SIZE)
     elif name == "fenney_power":         # every X at the default material's concentration
-        from scene.driver import fenney_concentration
-        inputs = {"x": np.arange(1024), "c": np.full(1024, fenney_concentration(SHININESS))}
+        from golden.fenney import concentration_for
+        inputs = {"x": np.arange(1024), "c": np.full(1024, concentration_for(SHININESS))}
     else:
         inputs = MODELS[name].vectors(rng, n, **params)
     with _lock("build", name, params):

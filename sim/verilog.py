@@ -73,8 +73,15 @@ def field_map(unit):
     for name in unit.status_ports:
         ports.append({"port": name, "direction": "output", "width": len(getattr(unit, name)),
                       "role": STATUS_ROLES.get(name, "status")})
-    return {"module": unit.NAME, "params": dict(unit.params), "latency": unit.latency,
-            "one_row_per_clock": True, "ports": ports}
+    out = {"module": unit.NAME, "params": dict(unit.params), "latency": unit.latency,
+           "one_row_per_clock": True, "ports": ports}
+    if hasattr(unit, "registers"):       # a scene pipeline: what its host writes, where
+        from scene import host
+        out["host"] = {"rows": "i: cmd = 0 a triangle; cmd = 1 a write of data to addr "
+                               "(scene/host.py): it waits for the pipeline to drain, then "
+                               "applies to the triangles after it",
+                       "map": host.address_map(unit)}
+    return out
 
 
 def _meaning(fmt):
@@ -84,7 +91,8 @@ def _meaning(fmt):
 
 STATUS_ROLES = {"busy": "work in flight (inputs accepted whose outputs have not all left)",
                 "culled": "count of degenerate triangles dropped since reset",
-                "held": "a bit per stage, the raster's lowest: the stage holds data"}
+                "held": "a bit per stage, the raster's lowest: the stage holds data",
+                "loading": "clocks with a host write at the head of i since reset"}
 
 
 STREAM_ROLES = {

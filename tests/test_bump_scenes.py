@@ -63,8 +63,8 @@ def _rtl(prep, latency=12, mem_ready=1.0, **traffic):
     from sim.stream import Memory
     memory = Memory(prep["memory"], latency=latency, p_ready=mem_ready,
                     seed=traffic.get("seed", 0))
-    return simulate("scene", prep["params"], prep["inputs"], "verilator",
-                    uniforms=prep["uniforms"], memory=memory, **traffic)[0]
+    return simulate("scene", prep["params"], S.rtl_inputs(prep), "verilator",
+                    memory=memory, **traffic)[0]
 
 
 def _candidates(prep, frag, ch):

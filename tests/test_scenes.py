@@ -15,6 +15,7 @@ import sys
 import numpy as np
 import pytest
 
+from golden import fenney
 from scene import driver as S
 from scene.pipeline import ScenePipeline, units_in
 from hdl.span_unit.raster import Raster
@@ -174,8 +175,8 @@ def test_dense_scenes_render(scene, tables):
     for key, table in {"image": {"width": 64, "height": 64}, **tables}.items():
         data.setdefault(key, {}).update(table)
     prep = S.prepare(S.parse(data, "dense"))
-    out, _ = simulate("scene", prep["params"], prep["inputs"], "verilator",
-                      uniforms=prep["uniforms"], p_valid=0.9, p_ready=0.7, seed=4)
+    out, _ = simulate("scene", prep["params"], S.rtl_inputs(prep), "verilator",
+                      p_valid=0.9, p_ready=0.7, seed=4)
     frag, _ = S.model_fragments(prep)
     assert longest_empty_run(len(prep["inputs"]["x0"]), frag["tri"]) > 16
     for key in ("tri", "x", "y"):
@@ -208,7 +209,7 @@ def test_one_pixel_triangle():
                                 (10 * S_ + 4, 11 * S_ - 2)]):
         one[f"x{k}"][:], one[f"y{k}"][:] = x, y
     prep = {**prep, "inputs": one}
-    out, _ = simulate("scene", prep["params"], one, "amaranth", uniforms=prep["uniforms"])
+    out, _ = simulate("scene", prep["params"], S.host.stream(one, prep["load"]), "amaranth")
     assert (list(out["x"]), list(out["y"])) == ([10], [10])
     img, cov, n = S.model(prep)
     assert n == 1 and cov.sum() == 1
@@ -242,5 +243,5 @@ def test_fenney_concentration_fits_the_exponent():
     """C from the fit: its fitted exponent within 10 % of n, where the range allows."""
     from golden.fenney import power_exponent
     for n in (8.0, 32.0, 100.0):
-        c = S.fenney_concentration(n)
+        c = fenney.concentration_for(n)
         assert abs(math.log(power_exponent(c)[0] / n)) < 0.1, (n, c)

@@ -42,8 +42,7 @@ def test_a_new_effect_is_one_file_and_one_line(monkeypatch):
     prep = S.prepare(S.parse(data, "cue"))
     assert [s.name for s in prep["pipeline"].stages][-2:] == ["colour", "depth_cue"]
     assert prep["uniforms"]["cue_near"] == 255
-    out, info = simulate("scene", prep["params"], prep["inputs"], "amaranth",
-                         uniforms=prep["uniforms"])
+    out, info = simulate("scene", prep["params"], S.rtl_inputs(prep), "amaranth")
     assert info["latency"] == prep["pipeline"].latency == plain["pipeline"].latency + 2
     img, cov, _ = S.model(prep)
     rgb = np.stack([out[c] for c in "rgb"], -1).astype(np.uint8)

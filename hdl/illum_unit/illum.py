@@ -103,5 +103,5 @@ class Illum(Unit):
                 for a in ("l", "h")}
         v = p.stage(v, **{f"_a{a}": addr[a] for a in ("l", "h")})
         v = p.stage(v, diffuse=rom(diffuse, v.pop("_al"), "diffuse"),
-                    specular=rom(specular, v.pop("_ah"), "specular"))
+                    specular=rom(specular, v.pop("_ah"), "specular", load="specular"))
         return p.stage(v)                                             # the tables' outputs

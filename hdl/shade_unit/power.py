@@ -36,7 +36,9 @@ def power_lut(shininess, mant_bits):
 
 
 def power_lanes(p, v, lanes, shininess, mant_bits):
-    """max(0, s)^n for several ``(s_key, p_key)`` side by side (4 stages); ``s`` is consumed."""
+    """max(0, s)^n for several ``(s_key, p_key)`` side by side (4 stages); ``s`` is consumed.
+    The table is scene data (``load="power"``): in a scene's pipeline the host loads it, and
+    ``shininess`` gives its shape only."""
     lut = power_lut(float(shininess), mant_bits)
     exp_lo, _ = power_bins(mant_bits)
     ts = {}
@@ -47,7 +49,7 @@ def power_lanes(p, v, lanes, shininess, mant_bits):
     v = p.stage(v, **ts)
     v = p.stage(v, **{f"_a_{s}": float_address(v.pop(f"_t_{s}"), VALUE.frac_bits, exp_lo,
                                                 EXP_HI, mant_bits) for s, _ in lanes})
-    v = p.stage(v, **{out: rom(lut, v.pop(f"_a_{s}"), "power") for s, out in lanes})
+    v = p.stage(v, **{out: rom(lut, v.pop(f"_a_{s}"), "power", load="power") for s, out in lanes})
     return p.stage(v)                                                   # the table's output
 
 

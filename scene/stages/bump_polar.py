@@ -27,9 +27,20 @@ class BumpPolar(Stage):
 
     @property
     def params(self):
-        q = self.q
-        return dict(method=q["rotation"], angle_bits=ANGLE_BITS,
-                    shininess=max(1, min(1024, round(q["shininess"]))))
+        return dict(method=self.q["rotation"], angle_bits=ANGLE_BITS)
+
+    @property
+    def tables(self):
+        """The illumination's specular table d^n: loaded (the shininess is data)."""
+        return {"specular": self.unit.illum.tables[1]}
+
+    def table_values(self, scene):
+        return {"specular": Unit.spec(**self.params, shininess=self.shininess(scene))
+                .illum.tables[1].contents}
+
+    @staticmethod
+    def shininess(scene):
+        return max(1, min(1024, round(scene["material"]["shininess"])))
 
     @property
     def why(self):
@@ -94,7 +105,8 @@ class BumpPolar(Stage):
     def model(self, prep, frag, ch, bound):
         """``golden.angular.bump_polar_float`` (rotations paper or exact, the illumination's
         tables), rounded to its u16 outputs; d = diffuse >> 1 (a value), p = specular >> 5."""
-        out = angular.bump_polar_float(self.inputs(prep, ch, bound), **self.unit.params)
+        out = angular.bump_polar_float(self.inputs(prep, ch, bound), **{
+            **self.unit.params, "shininess": self.shininess(prep["scene"])})
         diffuse, specular = (np.rint(out[k]).astype(np.int64) for k in ("diffuse", "specular"))
         ch = {k: x for k, x in ch.items() if k not in ("phin", "thetan", "psi", "_hi", "_lo")}
         return {**ch, "d0": (diffuse >> 1) * VALUE.lsb, "p0": specular >> 5}

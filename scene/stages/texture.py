@@ -1,20 +1,33 @@
 """The texture stage: the bump map's texel codes at the raster's texture coordinates (``s``,
-``t``, linear channels), nearest or bilinear, read through the texel cache from the texture
-memory port (``tex_req``, ``tex_resp``; ``hdl/texture_unit``). The texels are data: the
-driver encodes them from the scene's map (``golden.bump``) into the memory image, which the
-harness's memory holds; the hardware depends only on the map's size, the filter and the
-cache."""
+``t``, linear channels), nearest or bilinear, from one of two texture memories
+(``texture``):
+
+- ``external``: read through the texel cache from the texture memory port (``tex_req``,
+  ``tex_resp``; ``hdl/texture_unit``), for maps up to 1024 x 1024;
+- ``onchip``: a texture RAM in the top (a block RAM per bank), which the host loads through
+  its port (``scene/host.py``); a fixed latency, no cache. At most ``ONCHIP_MAX`` texels a
+  side: 128 x 128 texels of 16 bits take 16 of the ECP5-25F's 56 DP16KD.
+
+The texels are data: the driver encodes them from the scene's map (``golden.bump``) into the
+memory image, in one layout for both (``hdl.texture_unit.memory_image``); the hardware depends
+only on the map's size, the filter, the memory and the cache."""
 from amaranth.lib.wiring import In, Out
 
 from golden import bump as bumps
+from hdl.fixed import u
+from hdl.lut import WriteBus, blank_lut, rom
 from hdl.texture_unit import (CACHE_LATENCY, MAX_TEXTURE, address_stages, banks, filter_stages,
                               filtered, lines, memory_image, request_fields, response_fields,
                               texel_cache)
 from hdl.unit import Pipeline
 
+from ..host import equals
 from ..stage import Link, Stage, raw
 
 ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotation's default)
+MEMORIES = ("external", "onchip")
+ONCHIP_MAX = 128              # texels a side of the on-chip texture RAM (the ECP5-25F's fit)
+ONCHIP_LATENCY = 1            # the RAM's read register
 
 
 CACHE = ("cache_lines", "cache_line", "cache_ways", "tex_queue", "bank_ports")
@@ -38,11 +51,21 @@ class Texture(Stage):
         return ANGLE_BITS if self.kind == "polar" else 8
 
     @property
+    def onchip(self):
+        return self.q["texture"] == "onchip"
+
+    @property
     def params(self):
         q = self.q
-        out = dict(kind=self.kind, bump_size=q["bump_size"], filter=q["filter"],
-                   bits=self.bits, **{k: q[k] for k in CACHE})
-        return out
+        return dict(kind=self.kind, bump_size=q["bump_size"], filter=q["filter"],
+                    bits=self.bits, texture=q["texture"],
+                    **({} if self.onchip else {k: q[k] for k in CACHE}))
+
+    @property
+    def tables(self):
+        """The on-chip texture RAM: every bank's words, one after another."""
+        size = self.q["bump_size"]
+        return {"texture": blank_lut(size * size, u(2 * self.bits))} if self.onchip else {}
 
     @property
     def port_names(self):
@@ -53,6 +76,8 @@ class Texture(Stage):
 
     @property
     def ports(self):
+        if self.onchip:
+            return {}
         out = {}
         for req, resp in self.port_names:
             out.update({req: (Out, request_fields()),
@@ -62,7 +87,8 @@ class Texture(Stage):
     @property
     def why(self):
         return (f"bump.method = {self.q['bump']}: {self.kind} texels, {self.q['filter']}, "
-                f"{self.q['bump_size']} a side, through the texel cache")
+                f"{self.q['bump_size']} a side, " + (
+                    "from the on-chip texture RAM" if self.onchip else "through the texel cache"))
 
     def validate(self, q):
         for k in ("cache_lines", "cache_line", "cache_ways", "tex_queue"):
@@ -75,6 +101,11 @@ class Texture(Stage):
         if size & (size - 1) or size > MAX_TEXTURE:
             raise ValueError(f"bump.size: must be a power of two up to {MAX_TEXTURE} (the "
                              f"texture coordinates wrap by their bits), not {size}")
+        if q["texture"] == "onchip" and size > ONCHIP_MAX:
+            raise ValueError(f"bump.size: {size} x {size} texels exceed the on-chip texture RAM "
+                             f"(at most {ONCHIP_MAX} x {ONCHIP_MAX}, what an ECP5-25F holds "
+                             f"beside the pipeline); use texture = \"external\" (the memory "
+                             f"port) or a smaller map")
         if q["bump"] in ("fenney_polar", "angular") and q["filter"] != "nearest":
             raise ValueError(f"bump.filter: {q['bump']} filters nearest only (its texels are "
                              f"angles, which do not interpolate across their wrap); bilinear "
@@ -85,13 +116,16 @@ class Texture(Stage):
         """With every texel in the cache and nothing waiting: the address stages, the cache,
         the filter's stages."""
         f = self.q["filter"]
-        return address_stages(f) + CACHE_LATENCY + filter_stages(f)
+        memory = ONCHIP_LATENCY if self.onchip else CACHE_LATENCY
+        return address_stages(f) + memory + filter_stages(f)
 
-    def build(self, m, i, o, v, uni, ports):
+    def build(self, m, i, o, v, uni, ports, host):
         """The line addresses (a pipeline), the cache (its own handshakes: its latency
-        varies), the filter (a pipeline)."""
+        varies), the filter (a pipeline); or, on chip, one pipeline through the RAM."""
         q, f = self.q, self.q["filter"]
         size, n = q["bump_size"], banks(f)
+        if self.onchip:
+            return self.build_onchip(m, i, o, v, host["texture"])
         a_out, c_out = Link(), Link()
         p1 = Pipeline(m, i, a_out)
         v = lines(p1, v, "s", "t", size, f, q["cache_line"])
@@ -105,6 +139,30 @@ class Texture(Stage):
         v = filtered(p2, v, f, self.bits, size)
         m.d.comb += o.valid.eq(p2.valid)
         for valid in p1.valids + p2.valids:
+            busy = busy | valid
+        return v, busy
+
+    def build_onchip(self, m, i, o, v, bus):
+        """The texel addresses, a read of each bank's RAM (the host's writes land by the
+        memory image's address: bank, then word), the filter: one shared-enable pipeline."""
+        q, f = self.q, self.q["filter"]
+        size, n = q["bump_size"], banks(f)
+        depth = size * size // n
+        bb = depth.bit_length() - 1
+        p = Pipeline(m, i, o)
+        p.host = {f"texture{k}": WriteBus(bus.en & equals(bus.addr[bb:], k), bus.addr[:bb],
+                                          bus.data) for k in range(n)}
+        shape = blank_lut(depth, u(2 * self.bits))
+        v = lines(p, v, "s", "t", size, f, 1)
+        v = p.stage(v, **{f"_tex{k}": rom(shape, v.pop(f"_ln{k}")[:bb], f"texture{k}",
+                                          load=f"texture{k}") for k in range(n)})
+        v = filtered(p, v, f, self.bits, size)
+        if p.stages != self.latency:
+            raise AssertionError(f"texture has {p.stages} stages, its latency says "
+                                 f"{self.latency}")
+        m.d.comb += o.valid.eq(p.valid)
+        busy = 0
+        for valid in p.valids:
             busy = busy | valid
         return v, busy
 

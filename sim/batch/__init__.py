@@ -75,7 +75,9 @@ def ports_header(unit):
         lines.append("}")
     from ..stream import memory_ports
     mem = memory_ports(unit)
-    lines += [f"#define MEM {len(mem)}", f"#define HELD {int('held' in unit.status_ports)}"]
+    cmd = [k for k, f in enumerate(fin) if f.name == "cmd"]       # a scene's host writes
+    lines += [f"#define MEM {len(mem)}", f"#define HELD {int('held' in unit.status_ports)}",
+              f"#define CMD {cmd[0] if cmd else -1}"]
     # the texture memory ports (sim/batch/harness.cpp's memory): port p's signals
     cases = lambda body: "    switch (p) {\n" + "".join(
         f"    case {p}: {body(req, resp)} break;\n" for p, (req, resp) in enumerate(mem)) + \
@@ -213,12 +215,14 @@ def run_batch(name, params, inputs, *, p_valid=1.0, p_ready=1.0, seed=0, waves=N
             raise BatchError(f"batch run of {name} failed: "
                              f"{held_stages(unit, ''.join(errors).strip().removeprefix('error: '))}")
         data = np.fromfile(tmp / "out.bin", np.uint8)
-    outs, cycles, latency, culled, reads = (int(v) for v in data[:40].view(np.int64))
-    table = data[40:].view(dtype).reshape(outs, len(fout))
+    outs, cycles, latency, culled, reads, loading = (int(v) for v in data[:48].view(np.int64))
+    table = data[48:].view(dtype).reshape(outs, len(fout))
     out = {f.name: table[:, k] for k, f in enumerate(fout)}          # views, no copies
     info = {"latency": None if latency < 0 else latency, "cycles": cycles, "waves": wave}
     if unit.stream_ports:
         info["memory_reads"] = reads
     if unit.status_ports:
         info["culled"] = culled
+    if "loading" in unit.status_ports:
+        info["loading"] = loading
     return out, info

@@ -7,8 +7,9 @@
 // offers rows with random valid gaps (P_VALID) and holds each until it is accepted; the sink
 // is ready with probability P_READY each cycle: the same rules as sim/stream.py's Traffic,
 // from one generator (splitmix64). A stalled output must hold its payload: the harness checks
-// that and fails naming the cycle. OUT.bin: u64 rows, i64 cycles, latency (-1: none), culled,
-// memory words read, then rows x N_OUT row_t (int32 or int64, chosen per unit by sim/batch). Progress goes to
+// that and fails naming the cycle. OUT.bin: u64 rows, i64 cycles, latency (-1: none; from the
+// first row that is not a host write), culled, memory words read, clocks loading (host writes
+// at the head), then rows x N_OUT row_t (int32 or int64, chosen per unit by sim/batch). Progress goes to
 // stderr as "progress SENT OUTPUTS" lines.
 // ports.h (generated per unit by sim/batch.py) defines N_IN, N_OUT, MANY, row_t, set_inputs and
 // get_outputs; MEM, the number of texture memory ports, and their glue (mem_* below).
@@ -165,7 +166,9 @@ int main(int argc, char** argv) {
         }
         const bool taken = valid && i_ready;
         if (taken) {
-            if (first_in < 0) first_in = cycles;
+            // the latency starts at the first triangle, not at a host write (CMD: its field)
+            if (first_in < 0 && (CMD < 0 || in[sent * N_IN + (CMD < 0 ? 0 : CMD)] == 0))
+                first_in = cycles;
             sent++;
             valid = false;
         }
@@ -211,18 +214,21 @@ int main(int argc, char** argv) {
 #if VM_TRACE
     if (tfp) tfp->close();
 #endif
-    int64_t culled = 0;
+    int64_t culled = 0, loading = 0;
 #if MANY
     culled = top->culled;
+#endif
+#if CMD >= 0
+    loading = top->loading;
 #endif
     top->final();
     delete top;
     FILE* g = fopen(argv[2], "wb");
     if (!g) fail("cannot write the output file", cycles);
-    const int64_t head[5] = {(int64_t)outs, (int64_t)cycles,
+    const int64_t head[6] = {(int64_t)outs, (int64_t)cycles,
                              first_out < 0 ? -1 : first_out - first_in, culled,
-                             (int64_t)mem_reads};
-    fwrite(head, 8, 5, g);
+                             (int64_t)mem_reads, loading};
+    fwrite(head, 8, 6, g);
     fwrite(out.data(), sizeof(row_t), out.size(), g);
     fclose(g);
     return 0;
