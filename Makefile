@@ -26,7 +26,7 @@ $(STAMP): pyproject.toml
 # Writes build/render/<scene>/{rtl,model,reference,diff}.png and metrics.json.
 SCENE   ?= scenes/default.toml
 render: setup
-	$(PY) -m sim render $(SCENE) --simulator $(if $(filter command line,$(origin SIM)),$(SIM),verilator)
+	$(PY) -m sim render $(SCENE) --simulator $(if $(filter command line,$(origin SIM)),$(SIM),verilator)$(if $(TEXTURE), --texture $(TEXTURE))
 
 # Every scene in scenes/, and one contact sheet: build/render/gallery.png.
 gallery: setup
@@ -36,9 +36,11 @@ gallery: setup
 test: setup
 	$(PY) -m pytest -n $(JOBS) --dist loadgroup
 
-# Verilog of every unit into build/verilog/, each linted by Verilator (-Wall).
+# Verilog of every unit into build/verilog/, each linted by Verilator (-Wall); SCENE=...: that
+# scene's pipeline. TARGET=ecp5: the form make fpga places (MULT18X18D with their registers;
+# a bump scene's texture on chip), for a user's own ECP5 flow.
 verilog: setup
-	$(PY) -m sim verilog
+	$(PY) -m sim verilog$(if $(TARGET), --target $(TARGET))$(if $(filter command line,$(origin SCENE)), --scene $(SCENE))
 
 # Golden vectors through a simulator: make sim [UNIT=name] [SIM=icarus|cocotb-verilator|verilator|amaranth]
 # [VECTORS=n|all] [PARAM="name=value ..."] [WAVES=1]. A verdict per unit; with WAVES=1 a waveform

@@ -281,7 +281,10 @@ def prepare(scene, hardware=None):
     N = _unit(nrm)
     zmin = float(zc[drawn].min()) if len(drawn) else 1.0
     bump = _bump(scene, drawn, Ls, Hs, pipe) if scene["bump"]["method"] != "none" else None
-    spec = ScenePipeline.spec(**pipe)
+    try:                              # the build's choices (hardware) checked with the scene's
+        spec = ScenePipeline.spec(**pipe)
+    except ValueError as e:
+        raise SceneError(str(e)) from None
     vert = {"depth": zmin / zc, "nx": N[:, 0], "ny": N[:, 1], "nz": N[:, 2]}
     for j, (L, Hv) in enumerate(zip(Ls, Hs)):
         vert[f"d{j}"], vert[f"s{j}"] = N @ L, N @ Hv

@@ -91,20 +91,27 @@ def trace_args(args):
 def cmd_verilog(args):
     from .verilog import BUILD, export, lint
     out_dir = args.out or BUILD / "verilog"
+    target = args.target
     if args.scene:
-        from scene.driver import load, prepare
+        from scene.driver import load, pipeline_params, prepare
+        from .fpga import board_form
         scene = load(args.scene)
         module = f"scene_{scene['name']}"
         if not module.isidentifier():
             raise UsageError(f"{args.scene}: the scene's file name must make a Verilog "
                              f"module name ({module!r} is not one)")
-        path = export("scene", prepare(scene)["params"], out_dir, module=module)
-        lint(path, module)
-        print(f"{path}  lint clean (verilator -Wall); ports: {path.with_suffix('.json')}")
+        # an FPGA target takes the board form (make fpga's: the texture on chip by default)
+        texture = args.texture or ("external" if target == "generic" else "onchip")
+        params = board_form(pipeline_params(scene), texture) if target != "generic" else \
+            prepare(scene, {"texture": texture})["params"]
+        path = export("scene", params, out_dir, module=module, target=target)
+        lint(path, module, target)
+        print(f"{path}  lint clean (verilator -Wall), {target} form, texture {params['texture']};"
+              f" ports: {path.with_suffix('.json')}")
         return
     for name in UNITS:
-        path = export(name, None, out_dir)
-        lint(path, name)
+        path = export(name, None, out_dir, target=target)
+        lint(path, name, target)
         print(f"{path}  lint clean (verilator -Wall, accepted: see sim/verilog.py); "
               f"ports: {path.with_suffix('.json')}")
 
@@ -128,7 +135,7 @@ def cmd_render(args):
         raise UsageError(f"--mem-latency must be at least 1 and --mem-ready in (0, 1], not "
                          f"{args.mem_latency} and {args.mem_ready}")
     render(args.scene, args.out, args.simulator, size, mem_latency=args.mem_latency,
-           mem_ready=args.mem_ready)
+           mem_ready=args.mem_ready, hardware={"texture": args.texture})
 
 
 def params_for(names, pairs, chosen):
@@ -221,6 +228,13 @@ def main(argv=None):
     p.add_argument("--out")
     p.add_argument("--scene", metavar="SCENE.toml",
                    help="the composed pipeline of this scene: build/verilog/scene_<name>.v")
+    p.add_argument("--target", choices=("generic", "ecp5"), default="generic",
+                   help="generic Verilog (default; the synthesiser infers multipliers), or an "
+                        "FPGA family's form, which make fpga places (ecp5: MULT18X18D with "
+                        "their registers)")
+    p.add_argument("--texture", choices=("external", "onchip"),
+                   help="a bump scene's texture: external (default for generic) or onchip "
+                        "(default for an FPGA target)")
     p = sub.add_parser("render", help="render a scene through its pipeline's RTL, beside the "
                                       "float model and the reference")
     p.add_argument("scene", metavar="SCENE.toml")
@@ -234,6 +248,10 @@ def main(argv=None):
     p.add_argument("--mem-ready", type=float, default=1.0, metavar="P",
                    help="the chance each clock that the texture memory takes a request and "
                         "offers a response (default 1: no stalls)")
+    p.add_argument("--texture", choices=("external", "onchip"), default="external",
+                   help="bump scenes: the texels in external memory behind the texel cache "
+                        "(default), or in an on-chip RAM that the host loads (maps up to "
+                        "128 x 128)")
     p = sub.add_parser("check", help="golden vectors through the RTL, or your outputs against "
                                      "golden; one verdict per unit")
     p.add_argument("unit", nargs="?", choices=sorted(UNITS))

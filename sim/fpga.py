@@ -122,15 +122,27 @@ class SerialWrapper(wiring.Component):
         return m
 
 
-def designs(names):
+def board_form(params, texture="onchip"):
+    """A scene pipeline's parameters as a board builds it: a bump pipeline's texture in the
+    on-chip RAM (``texture = "onchip"``, the default for FPGA builds), at most
+    ``ONCHIP_MAX`` texels a side, loaded at run time like the rest of the scene's data; or
+    ``external``, the memory port, as the renders take it."""
+    from scene.stages.texture import ONCHIP_MAX
+    if params.get("bump", "none") == "none" or texture == "external":
+        return dict(params)
+    return {**params, "texture": "onchip", "bump_size": min(params["bump_size"], ONCHIP_MAX)}
+
+
+def designs(names, texture="onchip"):
     """``[(label, unit name, params)]``: the units, then the scenes' pipelines ("scene": the
-    default scene's; "scene_<name>": ``scenes/<name>.toml``'s)."""
-    from scene.driver import load, prepare
+    default scene's; "scene_<name>": ``scenes/<name>.toml``'s), in their board form."""
+    from scene.driver import load, pipeline_params
     out = [(n, n, {}) for n in names if n in UNITS]
     for n in names:
         if n == "scene" or n.startswith("scene_"):
             path = SCENE if n == "scene" else SCENES / f"{n[len('scene_'):]}.toml"
-            out.append((f"scene_{path.stem}", "scene", prepare(load(path))["params"]))
+            out.append((f"scene_{path.stem}", "scene",
+                        board_form(pipeline_params(load(path)), texture)))
     return out
 
 
@@ -305,8 +317,8 @@ def markdown(rows, seeds):
     return "\n".join(lines)
 
 
-def run(names, devices, seeds, jobs, quiet=False, cache=OUT / "cache"):
-    todo = [(label, name, params, dev) for label, name, params in designs(names)
+def run(names, devices, seeds, jobs, quiet=False, cache=OUT / "cache", texture="onchip"):
+    todo = [(label, name, params, dev) for label, name, params in designs(names, texture)
             for dev in devices]
     synths = {}
     with ThreadPoolExecutor(jobs) as pool, tqdm(total=len(todo) * (seeds + 1), desc="fpga",
@@ -345,6 +357,9 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, default=5, help="place-and-route seeds (default 5)")
     ap.add_argument("-j", "--jobs", type=int, default=2, help="parallel tool runs (default 2)")
     ap.add_argument("--out", default=str(OUT), help="report directory (default build/fpga)")
+    ap.add_argument("--texture", choices=("onchip", "external"), default="onchip",
+                    help="bump pipelines: the texture RAM on chip (default, at most 128 x 128) "
+                         "or the external memory port")
     args = ap.parse_args(argv)
     with user_errors():
         names = unit_names(args.units, {**UNITS, "scene": None,
@@ -356,7 +371,7 @@ def main(argv=None):
                 raise UsageError(f"--devices: unknown device {d!r}; known: ecp5, ice40")
         if args.seeds < 1:
             raise UsageError("--seeds must be at least 1")
-        rows = run(names, devices, args.seeds, args.jobs)
+        rows = run(names, devices, args.seeds, args.jobs, texture=args.texture)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "fpga.json").write_text(json.dumps(rows, indent=1) + "\n")

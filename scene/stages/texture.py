@@ -104,7 +104,7 @@ class Texture(Stage):
         if q["texture"] == "onchip" and size > ONCHIP_MAX:
             raise ValueError(f"bump.size: {size} x {size} texels exceed the on-chip texture RAM "
                              f"(at most {ONCHIP_MAX} x {ONCHIP_MAX}, what an ECP5-25F holds "
-                             f"beside the pipeline); use texture = \"external\" (the memory "
+                             f"beside the pipeline); use --texture external (the memory "
                              f"port) or a smaller map")
         if q["bump"] in ("fenney_polar", "angular") and q["filter"] != "nearest":
             raise ValueError(f"bump.filter: {q['bump']} filters nearest only (its texels are "
