@@ -103,15 +103,20 @@ def test_writes_between_triangles_under_backpressure(simulator, name):
 def test_onchip_texture_is_the_external_one(base, bump):
     """The on-chip texture RAM, loaded through the host port, gives the fragments that the
     external memory behind the texel cache gives, bit for bit (Amaranth's simulator, 24 x 24):
-    nearest (one bank) and bilinear (four banks, written by the memory image's layout)."""
+    nearest (one bank) and bilinear (four banks, written by the memory image's layout). The
+    external map sits at base 4096, above other words: the base register moves it."""
     tables = {"bump": bump, "image": {"width": 24, "height": 24}}
     sc = scene(base, **tables)
     ext, on = S.prepare(sc), S.prepare(sc, {"texture": "onchip"})
     assert on["memory"] is None and len(on["load"][0]) > len(ext["load"][0])
+    # the external map at a base of 4096 (a register): the memory holds something else below
+    addr, data = ext["load"]
+    at = host.REGISTERS + [f.name for f in ext["pipeline"].registers].index("tex_base")
+    ext["load"] = (addr, np.where(addr == at, 4096, data))
     from sim.stream import Memory
+    memory = Memory(np.concatenate([np.arange(4096) * 40503 % 65536, ext["memory"]]))
     got = [simulate("scene", p["params"], S.rtl_inputs(p), "amaranth", p_ready=0.7, seed=1,
-                    memory=None if p["memory"] is None else Memory(p["memory"]))[0]
-           for p in (ext, on)]
+                    memory=mem)[0] for p, mem in ((ext, memory), (on, None))]
     assert len(got[0]["x"]) > 100
     for key in got[0]:
         np.testing.assert_array_equal(got[0][key], got[1][key], err_msg=key)

@@ -11,12 +11,13 @@
 The texels are data: the driver encodes them from the scene's map (``golden.bump``) into the
 memory image, in one layout for both (``hdl.texture_unit.memory_image``); the hardware depends
 only on the map's size, the filter, the memory and the cache."""
+from amaranth.lib import stream
 from amaranth.lib.wiring import In, Out
 
 from golden import bump as bumps
-from hdl.fixed import u
+from hdl.fixed import Field, layout, u
 from hdl.lut import WriteBus, blank_lut, rom
-from hdl.texture_unit import (CACHE_LATENCY, MAX_TEXTURE, address_stages, banks, filter_stages,
+from hdl.texture_unit import (ADDR, CACHE_LATENCY, MAX_TEXTURE, address_stages, banks, filter_stages,
                               filtered, lines, memory_image, request_fields, response_fields,
                               texel_cache)
 from hdl.unit import Pipeline
@@ -60,6 +61,14 @@ class Texture(Stage):
         return dict(kind=self.kind, bump_size=q["bump_size"], filter=q["filter"],
                     bits=self.bits, texture=q["texture"],
                     **({} if self.onchip else {k: q[k] for k in CACHE}))
+
+    @property
+    def uniforms(self):
+        """External memory: the map's base address, a register (the memory may hold many)."""
+        return [] if self.onchip else [Field("tex_base", ADDR)]
+
+    def uniform_values(self, scene, L, H):
+        return {} if self.onchip else {"tex_base": 0}
 
     @property
     def tables(self):
@@ -130,8 +139,13 @@ class Texture(Stage):
         p1 = Pipeline(m, i, a_out)
         v = lines(p1, v, "s", "t", size, f, q["cache_line"])
         m.d.comb += a_out.valid.eq(p1.valid)
-        v, busy = texel_cache(m, a_out, v, c_out, [ports[r] for r, _ in self.port_names],
-                              [ports[r] for _, r in self.port_names],
+        reqs = []                     # the cache's requests, the map's base added on the way out
+        for r, _ in self.port_names:
+            inner = stream.Signature(layout(request_fields())).create(path=(f"_{r}",))
+            m.d.comb += [ports[r].valid.eq(inner.valid), inner.ready.eq(ports[r].ready),
+                         ports[r].payload.addr.eq(inner.payload.addr + uni["tex_base"])]
+            reqs.append(inner)
+        v, busy = texel_cache(m, a_out, v, c_out, reqs, [ports[r] for _, r in self.port_names],
                               banks=n, lines=q["cache_lines"], line=q["cache_line"],
                               ways=q["cache_ways"], bank_texels=size * size // n,
                               texel_bits=2 * self.bits, depth=q["tex_queue"])
