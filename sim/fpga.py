@@ -327,9 +327,15 @@ def run(names, devices, seeds, jobs, quiet=False, cache=OUT / "cache", texture="
         futs = {pool.submit(synthesise, label, name, params, dev, cache): (label, dev)
                 for label, name, params, dev in todo}
         pnr = {}
+        failed = {}
         for fut in as_completed(futs):
             label, dev = futs[fut]
-            work, synth = fut.result()
+            try:
+                work, synth = fut.result()
+            except RuntimeError as e:               # a design Yosys cannot take: its row
+                failed[label, dev] = str(e)
+                pb.update(seeds + 1)
+                continue
             synths[label, dev] = synth
             pb.update(1)
             pb.set_postfix_str(f"{label} {dev} synthesised")
@@ -341,10 +347,12 @@ def run(names, devices, seeds, jobs, quiet=False, cache=OUT / "cache", texture="
             runs.setdefault((label, dev), []).append(fut.result())
             pb.update(1)
             pb.set_postfix_str(f"{label} {dev} seed {fut.result()['seed']}")
-    rows = [summarise(label, dev, synths[label, dev], sorted(runs[label, dev],
-                                                            key=lambda r: r["seed"]))
+    return [{"design": label, "device": dev, "seeds": 0, "fits": False, "over": [],
+             "error": failed[label, dev], "util": {}, "wrapper_cells": {}}
+            if (label, dev) in failed else
+            summarise(label, dev, synths[label, dev], sorted(runs[label, dev],
+                                                           key=lambda r: r["seed"]))
             for label, _, _, dev in todo]
-    return rows
 
 
 def main(argv=None):

@@ -105,7 +105,8 @@ def test_onchip_texture_is_the_external_one(base, bump):
     external memory behind the texel cache gives, bit for bit (Amaranth's simulator, 24 x 24):
     nearest (one bank) and bilinear (four banks, written by the memory image's layout). The
     external map sits at base 4096, above other words: the base register moves it."""
-    tables = {"bump": bump, "image": {"width": 24, "height": 24}}
+    tables = {"bump": bump, "image": {"width": 24, "height": 24},
+              "mesh": {"segments": [10, 6]}}                # fewer triangles: fewer clocks
     sc = scene(base, **tables)
     ext, on = S.prepare(sc), S.prepare(sc, {"texture": "onchip"})
     assert on["memory"] is None and len(on["load"][0]) > len(ext["load"][0])
