@@ -10,9 +10,9 @@ are written behaviourally, so both forms are cycle-for-cycle the same.
 
 The FPGA flow hands :class:`Target` to ``elaborate(platform)``; a design asks :func:`ecp5`.
 """
-from amaranth.hdl import ClockSignal, Const, Instance, Signal, Value, signed
+from amaranth.hdl import ClockSignal, Const, Instance, Mux, Signal, Value, signed
 
-__all__ = ["Target", "ecp5", "mult18"]
+__all__ = ["Target", "ecp5", "mult18", "soft_mult"]
 
 
 class Target:
@@ -57,3 +57,20 @@ def mult18(m, name, a, b, en, platform):
         with m.If(en):
             m.d.sync += [ra.eq(a), rb.eq(b), p.eq(ra * rb)]
     return p
+
+
+def soft_mult(a, b):
+    """``a * b`` in logic, not a DSP: the partial products of the narrower operand's bits
+    (each ``b`` shifted, or 0), summed as a balanced tree of adders. For the small products
+    of a pipeline that has run out of MULT18X18D (an 8 x 11 product: about 200 LUT4);
+    both operands unsigned."""
+    a, b = Value.cast(a), Value.cast(b)
+    if a.shape().signed or b.shape().signed:
+        raise ValueError("soft_mult takes unsigned operands")
+    if len(a) > len(b):
+        a, b = b, a
+    terms = [Mux(a[i], b << i, 0) for i in range(len(a))]
+    while len(terms) > 1:
+        terms = [terms[k] + terms[k + 1] if k + 1 < len(terms) else terms[k]
+                 for k in range(0, len(terms), 2)]
+    return terms[0][:len(a) + len(b)]

@@ -130,7 +130,14 @@ def board_form(params, texture="onchip"):
     from scene.stages.texture import ONCHIP_MAX
     if params.get("bump", "none") == "none" or texture == "external":
         return dict(params)
-    return {**params, "texture": "onchip", "bump_size": min(params["bump_size"], ONCHIP_MAX)}
+    return {**params, "texture": "onchip",
+            "bump_size": min(params["bump_size"], BOARD_TEXTURE.get(params["bump"], ONCHIP_MAX))}
+
+
+# The on-chip texture's side where the 128 x 128 of ONCHIP_MAX cannot fit beside the rest:
+# angular's rotation and illumination tables take 52 of the 56 DP16KD, and 32 x 32 texels of
+# 24 bits take 2 more (128 x 128 would take 24).
+BOARD_TEXTURE = {"angular": 32}
 
 
 def designs(names, texture="onchip"):
