@@ -12,7 +12,7 @@ The FPGA flow hands :class:`Target` to ``elaborate(platform)``; a design asks :f
 """
 from amaranth.hdl import ClockSignal, Const, Instance, Mux, Signal, Value, signed
 
-__all__ = ["Target", "ecp5", "mult18", "soft_mult"]
+__all__ = ["Target", "ecp5", "mult18", "soft_mult", "Product"]
 
 
 class Target:
@@ -31,8 +31,10 @@ def mult18(m, name, a, b, en, platform):
     operands registered, then the product; everything holds while ``en`` is low. Returns the
     36-bit signed product register."""
     a, b = Value.cast(a), Value.cast(b)
+    unsigned_pair = not (a.shape().signed or b.shape().signed) and len(a) + len(b) <= 35
     for x in (a, b):
-        if len(x) > 18 or (len(x) == 18 and not x.shape().signed):
+        # 18 bits unsigned: the block's unsigned mode, where the product fits 36 signed
+        if len(x) > 18 or (len(x) == 18 and not x.shape().signed and not unsigned_pair):
             raise ValueError(f"{name}: an operand of {len(x)} bits does not fit 18 signed")
     p = Signal(signed(36), name=f"{name}_p", reset_less=True)
     if ecp5(platform):
@@ -74,3 +76,14 @@ def soft_mult(a, b):
         terms = [terms[k] + terms[k + 1] if k + 1 < len(terms) else terms[k]
                  for k in range(0, len(terms), 2)]
     return terms[0][:len(a) + len(b)]
+
+
+class Product:
+    """``a * b`` on a MULT18X18D with its own registers, for a :meth:`hdl.unit.Pipeline.stage`:
+    the block's input registers are this stage's, its output register the next stage's (which
+    passes the value on untouched), so the product costs no clock more than a product
+    between two stage registers, but Yosys need not pack those registers into the block (it
+    does not: ``mult18``)."""
+
+    def __init__(self, a, b):
+        self.a, self.b = Value.cast(a), Value.cast(b)

@@ -23,6 +23,7 @@ from amaranth.hdl import Module, Signal, Value
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from .dsp import Product, mult18
 from .fixed import layout
 from .lut import RomRead, read_roms
 
@@ -90,6 +91,13 @@ def param_range(default, allowed, per_channel=False):
     return out
 
 
+class _Pending:
+    """A product (:class:`hdl.dsp.Product`) between its input and its output register."""
+
+    def __init__(self, product):
+        self.product = product
+
+
 class Pipeline:
     """Registers with one shared enable, and the ``valid`` bit that travels with them."""
 
@@ -100,6 +108,7 @@ class Pipeline:
         self._valid = i.valid
         self.valids = []                   # every stage's valid bit: the pipeline is busy if any
         self.host = {}                     # the loaded tables' write buses (hdl.lut.rom's load)
+        self.platform = None               # the FPGA flow's (hdl.dsp.Target): Product's form
         self._names = set()
         m.d.comb += [self.en.eq(~o.valid | o.ready), i.ready.eq(self.en)]
 
@@ -112,6 +121,16 @@ class Pipeline:
         out = read_roms(self, {k: r for k, r in values.items() if isinstance(r, RomRead)})
         for name, value in values.items():
             if name in out:
+                continue
+            if isinstance(value, _Pending):        # a product's output register: this stage's
+                out[name] = value.product
+                continue
+            if isinstance(value, Product):         # its operands into the block's registers
+                prod = mult18(self.m, self.unique(f"mul_{name}"), value.a, value.b, self.en,
+                              self.platform)
+                if not (value.a.shape().signed or value.b.shape().signed):
+                    prod = prod[:len(value.a) + len(value.b)]       # unsigned: its own width
+                out[name] = _Pending(prod)
                 continue
             value = Value.cast(value)
             # data needs no reset (only the valid bits do): a DSP's or a block RAM's own
@@ -230,6 +249,7 @@ class Unit(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         p = Pipeline(m, self.i, self.o)
+        p.platform = platform
         v = {f.name: self.i.payload[f.name] for f in self.inputs}
         v = self.datapath(p, v)
         p.finish(self.o, v, self.outputs, self.latency, f"{self.NAME}: datapath")

@@ -159,7 +159,7 @@ class ScenePipeline(Unit):
             out = self.outputs if stage is rest[-1] else None
             unit = StageUnit(stage, last.payload.shape(), out, rename, source=SOURCE,
                              bases={key: base for (name, key), base in self.table_bases.items()
-                                    if name == stage.name})
+                                    if name == stage.name}, platform=platform)
             m.submodules[stage.name] = unit
             wiring.connect(m, last, unit.i)
             m.d.comb += [getattr(unit, f"u_{f.name}").eq(regs[f.name]) for f in stage.uniforms]

@@ -86,12 +86,13 @@ class Stage:
     def rtl(self, p, v, uni):
         raise NotImplementedError
 
-    def build(self, m, i, o, v, uni, ports, host):
+    def build(self, m, i, o, v, uni, ports, host, platform=None):
         """The stage's logic between the handshakes ``i`` and ``o`` (``Link``s); returns
         ``(values, busy)``. By default its ``rtl`` on one shared-enable pipeline, whose
-        stages must be its ``latency``, its tables loaded from ``host``."""
+        stages must be its ``latency``, its tables loaded from ``host``, its products in the
+        form of ``platform`` (``hdl.dsp.Product``)."""
         p = Pipeline(m, i, o)
-        p.host = host
+        p.host, p.platform = host, platform
         v = self.rtl(p, v, uni)
         if p.stages != self.latency:
             raise AssertionError(f"stage {self.name} has {p.stages} stages, its latency says "
@@ -129,7 +130,7 @@ class StageUnit(wiring.Component):
     ``busy``: data in the stage."""
 
     def __init__(self, stage, layout_in, out_fields=None, rename=None, source=None,
-                 bases=None):
+                 bases=None, platform=None):
         self.stage = stage
         self._m = m = Module()
         self._in = {name: Signal(f.shape, name=f"i_{name}") for name, f in layout_in}
@@ -146,7 +147,7 @@ class StageUnit(wiring.Component):
                        for name, (d, fields) in stage.ports.items()}
         v, self.busy = stage.build(m, self._li, self._lo,
                                    {(rename or {}).get(k, k): x for k, x in self._in.items()},
-                                   self._uni, self._ports, buses)
+                                   self._uni, self._ports, buses, platform)
         if out_fields is not None:
             source = source or {}
             v = {f.name: Value.cast(v[source.get(f.name, f.name)]) for f in out_fields}

@@ -69,12 +69,12 @@ def _fragments(prep):
 @pytest.mark.parametrize("simulator,name", list(per_simulator(["scene"],
                                                              only=("amaranth", "verilator"))))
 def test_writes_between_triangles_under_backpressure(simulator, name):
-    """The default scene (64 x 64 on the batch path, 40 x 40 on Amaranth's), its material changed
+    """The default scene (64 x 64 on the batch path, 32 x 32 on Amaranth's), its material changed
     halfway: the second material's writes (registers and the whole power table) follow
     triangle k - 1 while it is in flight, with random gaps and stalls. Every fragment of a
     triangle before k is shaded with the first material, every one after with the second:
     within 1 level of its own model, and beyond 1 level of the other on most."""
-    side = 64 if simulator == "verilator" else 40      # 64: the batch model test_scenes builds
+    side = 64 if simulator == "verilator" else 32      # 64: the batch model test_scenes builds
     size = {"image": {"width": side, "height": side}}
     a, b = S.prepare(scene("default", **size)), S.prepare(scene("default", **size, **OTHER))
     k = len(a["inputs"]["x0"]) // 2

@@ -20,7 +20,7 @@ rounding: 0.874 LSB of intensity at trig_bits = 10 (golden.fenney.polar_bound).
 """
 from amaranth.hdl import Mux
 
-from ..dsp import soft_mult
+from ..dsp import Product, soft_mult
 from ..fixed import Field, u
 from ..lut import quarter_cos_lut, rom
 from ..trig import cos_lookup
@@ -81,14 +81,15 @@ def polar_lanes(p, v, s, r, lanes, trig_bits):
     sin_s, cos_s = v.pop("_sin_s"), v.pop("_cos_s")
     n = range(len(lanes))
     # k3 cos S <= 255 * 2**t: t + 8 bits (one MULT18X18D port at the default t = 10). The
-    # two 8 x (t + 1) products are logic (soft_mult): a lane then takes one MULT18X18D, not 3
+    # two 8 x (t + 1) products are logic (soft_mult): a lane then takes one MULT18X18D, not 3;
+    # k3 cos S goes straight into that block's input register (Product), cos d as well
     v = p.stage(v, **{f"_m12_{k}": soft_mult(v.pop(k2), sin_s) for k, (_, k2, _, _, _, _) in
                       enumerate(lanes)},
-                **{f"_m14_{k}": soft_mult(v.pop(k3), cos_s)[:t + 8]
+                **{f"_m20_{k}": Product(soft_mult(v.pop(k3), cos_s)[:t + 8],
+                                        v.pop(f"_cos_d{k}"))
                    for k, (_, _, k3, _, _, _) in enumerate(lanes)})
-    v = p.stage(v, **{f"_m20_{k}": v.pop(f"_m14_{k}") * v.pop(f"_cos_d{k}") for k in n},
-                **{f"_a22_{k}": (v.pop(k1) << (2 * t)) + (v.pop(f"_m12_{k}") << t)
-                   for k, (k1, _, _, _, _, _) in enumerate(lanes)})
+    v = p.stage(v, **{f"_a22_{k}": (v.pop(k1) << (2 * t)) + (v.pop(f"_m12_{k}") << t)
+                      for k, (k1, _, _, _, _, _) in enumerate(lanes)})
     v = p.stage(v, **{f"_total{k}": Mux(v.pop(f"_neg{k}"), v[f"_a22_{k}"] - v[f"_m20_{k}"],
                                         v[f"_a22_{k}"] + v[f"_m20_{k}"]) for k in n})  # unit 24
     for k in n:

@@ -14,6 +14,7 @@ adder tree, 255 S, the level.
 """
 from amaranth.hdl import Mux
 
+from ..dsp import Product
 from ..fixed import Field
 from ..unit import Unit
 from .formats import COEF, LEVEL, ONE, POWER, RGB, colour_fields, light_fields
@@ -33,17 +34,18 @@ def colour_stages(lights, specular):
 def colour_lanes(p, v, lights, specular):
     """Consumes ``d<k>``, ``p<k>`` and the coefficient fields; gives ``r``, ``g``, ``b``."""
     v = dict(v)
-    v = p.stage(v, **{f"d{k}": (lambda d: Mux(d < 0, 0, Mux(d > ONE, ONE, d))[:15])(v[f"d{k}"])
-                      for k in range(lights)})                         # clamp(d, 0, 1)
-    prods = {f"_a{c}": v.pop(f"amb_{c}") << FRAC - COEF.frac_bits for c in RGB}
+    # clamp(d, 0, 1) into the products' input registers (Product: a MULT18X18D with its own
+    # registers), the products a clock later
+    prods = {}
     for k in range(lights):
-        dk = v.pop(f"d{k}")
+        dk = (lambda d: Mux(d < 0, 0, Mux(d > ONE, ONE, d))[:15])(v.pop(f"d{k}"))
         pk = v.pop(f"p{k}") if specular else None
         for c in RGB:
-            prods[f"_d{k}{c}"] = v.pop(f"kd{k}_{c}") * dk
+            prods[f"_d{k}{c}"] = Product(v.pop(f"kd{k}_{c}"), dk)
             if specular:
-                prods[f"_s{k}{c}"] = v.pop(f"ks{k}_{c}") * pk
+                prods[f"_s{k}{c}"] = Product(v.pop(f"ks{k}_{c}"), pk)
     v = p.stage(v, **prods)
+    v = p.stage(v, **{f"_a{c}": v.pop(f"amb_{c}") << FRAC - COEF.frac_bits for c in RGB})
     shift = FRAC - COEF.frac_bits - POWER.frac_bits
     terms = {c: [v.pop(f"_a{c}")] + [v.pop(f"_{t}{k}{c}") << (shift if t == "s" else 0)
                                      for k in range(lights) for t in ("d", "s")

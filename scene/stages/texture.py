@@ -128,7 +128,7 @@ class Texture(Stage):
         memory = ONCHIP_LATENCY if self.onchip else CACHE_LATENCY
         return address_stages(f) + memory + filter_stages(f)
 
-    def build(self, m, i, o, v, uni, ports, host):
+    def build(self, m, i, o, v, uni, ports, host, platform=None):
         """The line addresses (a pipeline), the cache (its own handshakes: its latency
         varies), the filter (a pipeline); or, on chip, one pipeline through the RAM."""
         q, f = self.q, self.q["filter"]
