@@ -50,7 +50,7 @@ class FenneyPolar(Unit):
 
     @property
     def latency(self):
-        return 6 + self.power.latency
+        return POLAR_STAGES + self.power.latency
 
     def datapath(self, p, v):
         v = polar_lanes(p, v, "s", "r", [("k1", "k2", "k3", "q", "intensity", "x")],
@@ -60,8 +60,11 @@ class FenneyPolar(Unit):
         return v
 
 
+POLAR_STAGES = 7
+
+
 def polar_lanes(p, v, s, r, lanes, trig_bits):
-    """Eq 3 for one texel (``s``, ``r`` keys) against several lights side by side (5 stages):
+    """Eq 3 for one texel (``s``, ``r`` keys) against several lights side by side (7 stages):
     ``lanes`` of ``(k1, k2, k3, q, intensity, x)`` keys, each giving the clamped 8-bit
     intensity and the power unit's 10-bit X (``x`` None: not wanted). The texel's sin S and
     cos S are read once for every lane; each lane has its own R - Q, its three multipliers
@@ -81,15 +84,16 @@ def polar_lanes(p, v, s, r, lanes, trig_bits):
     sin_s, cos_s = v.pop("_sin_s"), v.pop("_cos_s")
     n = range(len(lanes))
     # k3 cos S <= 255 * 2**t: t + 8 bits (one MULT18X18D port at the default t = 10). The
-    # two 8 x (t + 1) products are logic (soft_mult): a lane then takes one MULT18X18D, not 3;
-    # k3 cos S goes straight into that block's input register (Product), cos d as well
+    # two 8 x (t + 1) products are logic (soft_mult, each alone in its clock): a lane then
+    # takes one MULT18X18D, not 3, with its own registers (Product)
     v = p.stage(v, **{f"_m12_{k}": soft_mult(v.pop(k2), sin_s) for k, (_, k2, _, _, _, _) in
                       enumerate(lanes)},
-                **{f"_m20_{k}": Product(soft_mult(v.pop(k3), cos_s)[:t + 8],
-                                        v.pop(f"_cos_d{k}"))
+                **{f"_m14_{k}": soft_mult(v.pop(k3), cos_s)[:t + 8]
                    for k, (_, _, k3, _, _, _) in enumerate(lanes)})
-    v = p.stage(v, **{f"_a22_{k}": (v.pop(k1) << (2 * t)) + (v.pop(f"_m12_{k}") << t)
-                      for k, (k1, _, _, _, _, _) in enumerate(lanes)})
+    v = p.stage(v, **{f"_m20_{k}": Product(v.pop(f"_m14_{k}"), v.pop(f"_cos_d{k}")) for k in n},
+                **{f"_a22_{k}": (v.pop(k1) << (2 * t)) + (v.pop(f"_m12_{k}") << t)
+                   for k, (k1, _, _, _, _, _) in enumerate(lanes)})
+    v = p.stage(v)                                                   # the products
     v = p.stage(v, **{f"_total{k}": Mux(v.pop(f"_neg{k}"), v[f"_a22_{k}"] - v[f"_m20_{k}"],
                                         v[f"_a22_{k}"] + v[f"_m20_{k}"]) for k in n})  # unit 24
     for k in n:
