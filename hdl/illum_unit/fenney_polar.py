@@ -84,14 +84,18 @@ def polar_lanes(p, v, s, r, lanes, trig_bits):
     sin_s, cos_s = v.pop("_sin_s"), v.pop("_cos_s")
     n = range(len(lanes))
     # k3 cos S <= 255 * 2**t: t + 8 bits (one MULT18X18D port at the default t = 10). The
-    # two 8 x (t + 1) products are logic (soft_mult, each alone in its clock): a lane then
-    # takes one MULT18X18D, not 3, with its own registers (Product)
-    v = p.stage(v, **{f"_m12_{k}": soft_mult(v.pop(k2), sin_s) for k, (_, k2, _, _, _, _) in
-                      enumerate(lanes)},
-                **{f"_m14_{k}": soft_mult(v.pop(k3), cos_s)[:t + 8]
-                   for k, (_, _, k3, _, _, _) in enumerate(lanes)})
-    v = p.stage(v, **{f"_m20_{k}": Product(v.pop(f"_m14_{k}"), v.pop(f"_cos_d{k}")) for k in n},
-                **{f"_a22_{k}": (v.pop(k1) << (2 * t)) + (v.pop(f"_m12_{k}") << t)
+    # two 8 x (t + 1) products are logic: a lane then takes one MULT18X18D, not 3, with its
+    # own registers (Product). Each is two 4 x (t + 1) halves (soft_mult) in one clock, summed
+    # in the next: 8 partial products in one clock were its critical path (117 MHz)
+    new = {}
+    for k, (_, k2, k3, _, _, _) in enumerate(lanes):
+        for key, c, x in (("m12", v.pop(k2), sin_s), ("m14", v.pop(k3), cos_s)):
+            new.update({f"_{key}lo_{k}": soft_mult(c[:4], x), f"_{key}hi_{k}": soft_mult(c[4:], x)})
+    v = p.stage(v, **new)
+    whole = lambda key, k: v.pop(f"_{key}lo_{k}") + (v.pop(f"_{key}hi_{k}") << 4)
+    v = p.stage(v, **{f"_m20_{k}": Product(whole("m14", k)[:t + 8], v.pop(f"_cos_d{k}"))
+                      for k in n},
+                **{f"_a22_{k}": (v.pop(k1) << (2 * t)) + (whole("m12", k) << t)
                    for k, (k1, _, _, _, _, _) in enumerate(lanes)})
     v = p.stage(v)                                                   # the products
     v = p.stage(v, **{f"_total{k}": Mux(v.pop(f"_neg{k}"), v[f"_a22_{k}"] - v[f"_m20_{k}"],
