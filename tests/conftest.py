@@ -86,3 +86,9 @@ def longest_empty_run(triangles, tri):
     covered = np.zeros(triangles, bool)
     covered[np.asarray(tri)] = True
     return int((np.diff(np.flatnonzero(np.r_[True, covered, True])) - 1).max())
+
+
+def long_where(params, *ids):
+    """``params`` with those whose id is in ``ids`` marked ``long`` (make soak runs them)."""
+    return [pytest.param(*p.values, id=p.id, marks=[*p.marks, pytest.mark.long])
+            if p.id in ids else p for p in params]

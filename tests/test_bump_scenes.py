@@ -125,10 +125,13 @@ def _xz_interval(prep, ch):
 
 @VERILATOR
 @pytest.mark.parametrize("filter,light", [
-    pytest.param("nearest", [-1.0, -1.0, 2.0], id="nearest", marks=XZ_NEAREST),
+    # the nearest filter is a model of its own: make soak (nearest is tested on fenney_polar)
+    pytest.param("nearest", [-1.0, -1.0, 2.0], id="nearest",
+                 marks=[XZ_NEAREST, pytest.mark.long]),
     pytest.param("bilinear", [-1.0, -1.0, 2.0], id="bilinear-edge-texels"),
+    pytest.param("bilinear", [0.3, 0.2, -1.0], id="bilinear-below-the-horizon"),
     pytest.param("nearest", [0.3, 0.2, -1.0], id="nearest-below-the-horizon",
-                 marks=XZ_NEAREST)])
+                 marks=[XZ_NEAREST, pytest.mark.long])])
 def test_xz_scene_rtl_within_bound(filter, light):
     """A torus through fenney_xz (L' and H' quadratic, each with its own constants): every
     fragment's colour within the interval above, on both filters and with the light below

@@ -19,7 +19,7 @@ from scene import driver as S, host
 from sim.run import simulate
 from sim.simulators import available
 
-from .conftest import per_simulator
+from .conftest import long_where, per_simulator
 
 SCENES = "scenes"
 
@@ -66,8 +66,8 @@ def _fragments(prep):
     return frag, np.stack([ch[c] for c in "rgb"], -1).astype(int)
 
 
-@pytest.mark.parametrize("simulator,name", list(per_simulator(["scene"],
-                                                             only=("amaranth", "verilator"))))
+@pytest.mark.parametrize("simulator,name", long_where(
+    per_simulator(["scene"], only=("amaranth", "verilator")), "amaranth-scene"))
 def test_writes_between_triangles_under_backpressure(simulator, name):
     """The default scene (64 x 64 on the batch path, 32 x 32 on Amaranth's), its material changed
     halfway: the second material's writes (registers and the whole power table) follow
@@ -99,7 +99,8 @@ def test_writes_between_triangles_under_backpressure(simulator, name):
 
 @pytest.mark.parametrize("base,bump", [
     ("bump_polar", {"size": 64}),
-    ("bump_xz", {"size": 32, "filter": "bilinear"})], ids=["nearest", "bilinear"])
+    pytest.param("bump_xz", {"size": 32, "filter": "bilinear"}, marks=pytest.mark.long)],
+    ids=["nearest", "bilinear"])
 def test_onchip_texture_is_the_external_one(base, bump):
     """The on-chip texture RAM, loaded through the host port, gives the fragments that the
     external memory behind the texel cache gives, bit for bit (Amaranth's simulator, 24 x 24):

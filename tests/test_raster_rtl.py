@@ -9,7 +9,7 @@ from hypothesis import given, settings, strategies as st
 from golden import MODELS, random_triangles, raster, raster_hard_cases
 from hdl.units import ParamError, make_unit
 
-from .conftest import per_simulator, stream
+from .conftest import long_where, per_simulator, stream
 
 SMALL = {"screen_bits": 6}                    # 64 x 64: whole-screen triangles in seconds
 # two channels in two groups of edge constants, and two flat words
@@ -38,7 +38,8 @@ def check(inputs, out, params):
     return worst
 
 
-@pytest.mark.parametrize("simulator,name", list(per_simulator(["raster"])))
+@pytest.mark.parametrize("simulator,name", long_where(per_simulator(["raster"]),
+                                                     "amaranth-raster"))
 def test_hard_cases_with_backpressure(simulator, name):
     params = make_unit(name, spec=True, **SMALL).params
     hard, labels = raster_hard_cases(**params)

@@ -190,13 +190,13 @@ def test_dense_scenes_render(scene, tables):
 
 @pytest.mark.parametrize("scene", ["phong", "fenney_power", "sphere_two_lights", "diffuse"])
 def test_other_pipelines_on_amaranth(scene, tmp_path):
-    """Phong, Fenney's power, two lights and diffuse-only, at 48 x 48 on Amaranth's
+    """Phong, Fenney's power, two lights and diffuse-only, at 32 x 32 on Amaranth's
     simulator: the RTL against the model."""
     from sim.render import render
-    m = render(f"{SCENES}/{scene}.toml", tmp_path, "amaranth", (48, 48), quiet=True)
+    m = render(f"{SCENES}/{scene}.toml", tmp_path, "amaranth", (32, 32), quiet=True)
     assert m["rtl_vs_model"]["coverage_mismatch"] == 0
     assert m["rtl_vs_model"]["max_abs"] <= 1
-    assert m["fragments"] > 300
+    assert m["fragments"] > 150
 
 
 def test_one_pixel_triangle():
