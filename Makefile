@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga tradeoffs texcache clean
+.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga tradeoffs texcache turntable clean
 
 setup: $(STAMP)
 
@@ -70,6 +70,15 @@ DASK    ?=
 tradeoffs: setup
 	$(PY) -m sim.tradeoffs $(if $(QUICK),--quick) $(if $(DASK),--dask $(DASK)) \
 		$(if $(filter command line,$(origin SEEDS)),--seeds $(SEEDS))
+
+# A scene in motion, every frame through the RTL on the batch path (the scene's [turntable]
+# table: the mesh spinning or the lights orbiting): build/turntable/<scene>/{turntable.gif,
+# psnr.png,strip.png,turntable.json}. No SCENE: the default torus through linear, X-shading
+# and Phong side by side. make turntable [SCENE=...] [FRAMES=n] [DASK=tcp://scheduler:8786]
+FRAMES  ?=
+turntable: setup
+	$(PY) -m sim.turntable $(if $(filter command line,$(origin SCENE)),$(SCENE)) \
+		$(if $(FRAMES),--frames $(FRAMES)) $(if $(DASK),--dask $(DASK))
 
 # The texel cache on the bump scenes: hit rate, fragments per clock, memory words per fragment
 # at 256 and 1024 px, memory latency 12 and 40, three caches: build/texcache/texcache.md.

@@ -114,14 +114,18 @@ def grid_frames(shape, m, n):
     return tuple(x.reshape(-1, 3) for x in (T, B, N))
 
 
-def frames_from_uv(pos, nrm, uv, tris):
+def frames_from_uv(pos, nrm, uv, tris, period=(np.inf, np.inf)):
     """(T, B, N) per vertex from texture coordinates: each triangle's dP/ds and dP/dt (from
     its edges and their (s, t) steps), weighted by its area and summed at its vertices, then
     T made orthogonal to N and B = N x T (B's sign from dP/dt, so a mirrored mapping keeps its
-    handedness)."""
+    handedness). ``period``: (s, t) steps are taken within half of it (a periodic mapping's
+    seam)."""
     p, w = pos[tris], uv[tris]
     e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-    d1, d2 = w[:, 1] - w[:, 0], w[:, 2] - w[:, 0]
+    finite = np.isfinite(np.asarray(period, float))
+    period = np.where(finite, period, 1.0)
+    wrap = lambda d: np.where(finite, np.mod(d + period / 2, period) - period / 2, d)
+    d1, d2 = wrap(w[:, 1] - w[:, 0]), wrap(w[:, 2] - w[:, 0])
     det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
     ok = np.abs(det) > 1e-12
     inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)[:, None]
@@ -167,13 +171,6 @@ def rotation(degrees):
         r[a, a], r[a, b], r[b, a], r[b, b] = c, -s, s, c
         rot = r @ rot
     return rot
-
-
-def frames(scene):
-    """(T, B, N) per vertex of a scene's mesh, in world space (its rotation applied)."""
-    msh = scene["mesh"]
-    rot = rotation(msh["rotate"])
-    return tuple(f @ rot.T for f in grid_frames(msh["shape"], *msh["segments"]))
 
 
 def to_tangent(v, T, B, N):

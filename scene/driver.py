@@ -32,7 +32,7 @@ from hdl.setup_unit.formats import EDGE, VALUE, coord
 from hdl.shade_unit.formats import RGB
 from hdl.texture_unit import MAX_TEXTURE
 
-from . import host
+from . import host, obj
 from .pipeline import BUMPS, METHODS, ScenePipeline, choose
 from .stage import lanes as lanes_of, raw
 from .stages.fenney_polar import pack
@@ -51,7 +51,7 @@ DEFAULTS = {
     "camera": {"eye": [0.0, -3.5, 2.5], "target": [0.0, 0.0, 0.0], "up": [0.0, 0.0, 1.0],
                "fov_y": 40.0},
     "mesh": {"shape": "torus", "major_radius": 1.0, "minor_radius": 0.5, "segments": [12, 12],
-             "rotate": [0.0, 0.0, 0.0], "translate": [0.0, 0.0, 0.0], "scale": 1.0},
+             "rotate": [0.0, 0.0, 0.0], "translate": [0.0, 0.0, 0.0], "scale": 1.0, "file": ""},
     "material": {"color": [0.9, 0.5, 0.2], "ambient": 0.1, "diffuse": 0.7, "specular": 0.4,
                  "shininess": 32.0},
     "lights": [{"type": "directional", "to_light": [-1.0, -1.0, 2.0],
@@ -59,6 +59,8 @@ DEFAULTS = {
     "shading": {"method": "xshading", "specular": True, "power": "table"},
     "bump": {"method": "none", "map": "bricks", "size": 256, "repeat": [8.0, 2.0],
              "depth": 1.0, "filter": "nearest", "rotation": "paper"},
+    "turntable": {"spin": "light", "axis": [0.0, 0.0, 1.0], "degrees": 360.0, "frames": 24,
+                  "frame": 0},
 }
 LIGHT = DEFAULTS["lights"][0]
 # Each key's kind and range: ("num", lo, hi) finite reals, ("int", lo, hi), ("vec", n, lo, hi)
@@ -69,7 +71,7 @@ RULES = {
               "background": ("vec", 3, 0.0, 1.0)},
     "camera": {"eye": ("vec", 3, -INF, INF), "target": ("vec", 3, -INF, INF),
                "up": ("vec", 3, -INF, INF), "fov_y": ("num", 1.0, 170.0)},
-    "mesh": {"shape": ("choice", ("torus", "sphere", "plane")),
+    "mesh": {"shape": ("choice", ("torus", "sphere", "plane", "obj")), "file": ("str",),
              "major_radius": ("num", 1e-6, INF), "minor_radius": ("num", 1e-6, INF),
              "segments": ("ints", 2, 3, 256), "rotate": ("vec", 3, -INF, INF),
              "translate": ("vec", 3, -INF, INF), "scale": ("num", 1e-6, INF)},
@@ -84,6 +86,9 @@ RULES = {
              "repeat": ("vec", 2, 1e-6, INF), "depth": ("num", 0.0, INF),
              "filter": ("choice", ("nearest", "bilinear")),
              "rotation": ("choice", ("paper", "exact"))},
+    "turntable": {"spin": ("choice", ("light", "mesh")), "axis": ("vec", 3, -INF, INF),
+                  "degrees": ("num", -INF, INF), "frames": ("int", 1, 100000),
+                  "frame": ("int", 0, 100000)},
 }
 
 
@@ -130,8 +135,10 @@ def _table(key, given, defaults, rules):
     return {k: _value(f"{key}.{k}", rules[k], given.get(k, defaults[k])) for k in rules}
 
 
-def parse(data, name="scene"):
-    """A validated scene (every key filled in) from a parsed TOML document."""
+def parse(data, name="scene", base=None):
+    """A validated scene (every key filled in) from a parsed TOML document; ``base``: the
+    directory a relative ``mesh.file`` is read from (the scene file's; default: the current
+    one). ``mesh.file`` comes out absolute, so a parsed scene parses again to itself."""
     unknown = sorted(set(data) - set(DEFAULTS))
     if unknown:
         raise SceneError(f"{unknown[0]}: unknown table (known: {', '.join(DEFAULTS)})")
@@ -148,6 +155,13 @@ def parse(data, name="scene"):
                     raise SceneError(f"lights[{k}].to_light: must not be the zero vector")
         else:
             scene[key] = _table(key, data.get(key, {}), DEFAULTS[key], RULES[key])
+    _mesh_file(scene["mesh"], base)
+    turn = scene["turntable"]
+    if not any(turn["axis"]):
+        raise SceneError("turntable.axis: must not be the zero vector")
+    if turn["frame"] >= turn["frames"]:
+        raise SceneError(f"turntable.frame: must be below turntable.frames ({turn['frames']}), "
+                         f"not {turn['frame']}")
     cam = scene["camera"]
     f = np.subtract(cam["target"], cam["eye"])
     if not np.linalg.norm(f) > 0:
@@ -175,7 +189,24 @@ def load(path):
         data = tomllib.loads(text.decode("utf-8"))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
         raise SceneError(f"{path}: not a valid TOML file: {e}") from None
-    return parse(data, path.stem)
+    return parse(data, path.stem, path.parent)
+
+
+def _mesh_file(msh, base):
+    """``mesh.file``: given exactly when ``mesh.shape = "obj"``, made absolute and read (so
+    that a bad OBJ is a scene error naming its file and line)."""
+    if msh["shape"] != "obj":
+        if msh["file"]:
+            raise SceneError(f'mesh.file: only with mesh.shape = "obj", not with '
+                             f'{msh["shape"]!r}')
+        return
+    if not msh["file"]:
+        raise SceneError('mesh.file: mesh.shape = "obj" needs the OBJ file\'s path')
+    msh["file"] = str((Path(base or ".") / msh["file"]).resolve())
+    try:
+        obj.read(msh["file"])
+    except obj.ObjError as e:
+        raise SceneError(f"mesh.file: {e}") from None
 
 
 # ---- the mesh (world space) ------------------------------------------------------------------
@@ -195,10 +226,14 @@ def _grid_triangles(m, n, wrap_i, wrap_j):
 
 
 def mesh(scene):
-    """(positions, normals, triangles) in world space."""
+    """(positions, normals, triangles) in world space: the shape's, oriented
+    (``orientation``), scaled and translated; triangles of no area dropped."""
     msh = scene["mesh"]
     m, n = msh["segments"]
-    if msh["shape"] == "torus":
+    if msh["shape"] == "obj":
+        o = obj.read(msh["file"])
+        pos, nrm, tris = o.pos, o.nrm, o.tris
+    elif msh["shape"] == "torus":
         R, r = msh["major_radius"], msh["minor_radius"]
         phi, psi = np.meshgrid(2 * np.pi * np.arange(m) / m, 2 * np.pi * np.arange(n) / n,
                                indexing="ij")
@@ -218,13 +253,57 @@ def mesh(scene):
         nrm = np.broadcast_to([0.0, 0.0, 1.0], pos.shape)
         tris = _grid_triangles(m + 1, n + 1, False, False)
     pos, nrm = pos.reshape(-1, 3), nrm.reshape(-1, 3)
-    rot = rotation(msh["rotate"])
+    rot = orientation(scene)
     pos = pos @ rot.T * msh["scale"] + np.array(msh["translate"])
     nrm = nrm @ rot.T
     # drop triangles with a repeated vertex (the sphere's poles)
     p = pos[tris]
     area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=-1)
     return pos, nrm, tris[area > 1e-12 * max(1.0, float(np.abs(pos).max()) ** 2)]
+
+
+def turn(scene):
+    """The turntable's rotation at the scene's frame (docs/scenes.md): ``turntable.degrees``
+    * frame / frames about ``turntable.axis`` (right-handed), through the mesh's origin."""
+    from scipy.spatial.transform import Rotation
+    t = scene["turntable"]
+    angle = math.radians(t["degrees"] * t["frame"] / t["frames"])
+    return Rotation.from_rotvec(angle * _unit(t["axis"])).as_matrix()
+
+
+def orientation(scene):
+    """The rotation from the mesh's own axes to the world's: ``mesh.rotate``, then the
+    turntable's turn where it spins the mesh."""
+    rot = rotation(scene["mesh"]["rotate"])
+    return turn(scene) @ rot if scene["turntable"]["spin"] == "mesh" else rot
+
+
+def texcoords(scene):
+    """Per-vertex texture coordinates in tiles (``bump.repeat`` applied), and which of s
+    and t are periodic (a triangle takes its vertices' within half a period of each other)."""
+    msh = scene["mesh"]
+    if msh["shape"] != "obj":
+        return bumps.texcoords(scene), (True, True)
+    o = obj.read(msh["file"])
+    return o.uv * np.array(scene["bump"]["repeat"], float), o.periodic
+
+
+def tangent_frames(scene):
+    """(T, B, N) per vertex of the mesh in world space: the built-in shapes' analytic frames;
+    an OBJ's from its texture coordinates (``golden.bump.frames_from_uv``)."""
+    msh = scene["mesh"]
+    if msh["shape"] == "obj":
+        o = obj.read(msh["file"])
+        uv, periodic = texcoords(scene)
+        period = np.where(periodic, scene["bump"]["repeat"], np.inf)
+        try:
+            own = bumps.frames_from_uv(o.pos, o.nrm, uv, o.tris, period)
+        except bumps.BumpError as e:
+            raise SceneError(f"mesh.file: {msh['file']}: {e}") from None
+    else:
+        own = bumps.grid_frames(msh["shape"], *msh["segments"])
+    rot = orientation(scene)
+    return tuple(f @ rot.T for f in own)
 
 
 def _unit(v):
@@ -276,7 +355,8 @@ def prepare(scene, hardware=None):
     drawn = tris[keep]
     # per-vertex lighting: viewer at infinity
     V = _unit(np.subtract(cam["eye"], cam["target"]))
-    Ls = [_unit(l["to_light"]) for l in scene["lights"]]
+    spin = turn(scene) if scene["turntable"]["spin"] == "light" else np.eye(3)
+    Ls = [_unit(spin @ l["to_light"]) for l in scene["lights"]]
     Hs = [_unit(L + V) for L in Ls]
     N = _unit(nrm)
     zmin = float(zc[drawn].min()) if len(drawn) else 1.0
@@ -361,8 +441,10 @@ def _bump(scene, drawn, Ls, Hs, pipe):
                          f"texture ROM needs a square power of two up to {MAX_TEXTURE}")
     pipe["bump_size"] = size
     period = np.array(b["repeat"], float)
-    st = bumps.texcoords(scene)[drawn]                                   # (n, 3, 2)
-    st = st[:, :1] + np.mod(st - st[:, :1] + period / 2, period) - period / 2
+    uv, periodic = texcoords(scene)
+    st = uv[drawn]                                                        # (n, 3, 2)
+    st = np.where(periodic, st[:, :1] + np.mod(st - st[:, :1] + period / 2, period)
+                  - period / 2, st)
     st -= np.floor(st.min(axis=1, keepdims=True))
     span = st.max(axis=1) - st.min(axis=1)
     if len(span) and span.max() >= 1.0 - VALUE.lsb:
@@ -371,7 +453,7 @@ def _bump(scene, drawn, Ls, Hs, pipe):
                          f"map (along {'st'[int(np.argmax(span[k]))]}); the raster carries "
                          f"texture coordinates in [-2, 2), so a triangle may span less than "
                          f"one tile: use more mesh.segments or a smaller repeat")
-    frames = [f[drawn] for f in bumps.frames(scene)]                      # (n, 3, 3) each
+    frames = [f[drawn] for f in tangent_frames(scene)]                    # (n, 3, 3) each
     Nt = _unit(frames[2].sum(1))
     Tt = frames[0].sum(1)
     Tt = _unit(Tt - np.einsum("ij,ij->i", Tt, Nt)[:, None] * Nt)

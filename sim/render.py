@@ -68,22 +68,11 @@ def flip(test, ref, cov):
     return round(float(emap[cov].mean()), 5) if cov.any() else 0.0
 
 
-def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=False,
-           hardware=None, mem_latency=12, mem_ready=1.0):
-    """Render a scene; writes the five files of scenes.md and returns the metrics.
-    ``hardware``: pipeline parameters that are not scene keys (``make tradeoffs``'s knobs:
-    the reciprocal, the power table's bits, fenney_dot's renormalisation). ``mem_latency``,
-    ``mem_ready``: the texture memory's latency and the chance each clock that it takes a
-    request and offers a response (``sim.stream.Memory``)."""
+def run_rtl(prep, simulator="verilator", mem_latency=12, mem_ready=1.0, progress=None):
+    """A prepared scene through its pipeline's RTL (the model built first, and not timed):
+    (image, covered, fragments, info, memory, wall seconds)."""
     from .run import simulate
-    scene = S.load(scene_path)
-    if size:
-        scene["image"]["width"], scene["image"]["height"] = size
-        scene = S.parse({k: v for k, v in scene.items() if k != "name"}, scene["name"])
-    out_dir = Path(out_dir or BUILD / "render" / scene["name"])
-    out_dir.mkdir(parents=True, exist_ok=True)
-    prep = S.prepare(scene, hardware)
-    pipe, params = prep["pipeline"], prep["params"]
+    params = prep["params"]
     if simulator == "verilator":                # build (or find) the model before timing
         from .batch import build
         build("scene", params)
@@ -94,11 +83,31 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     memory = None if prep["memory"] is None else \
         Memory(prep["memory"], latency=mem_latency, p_ready=mem_ready)
     frags, info = simulate("scene", params, S.rtl_inputs(prep), simulator, memory=memory,
-                           progress=None if quiet else f"scene {scene['name']}")
+                           progress=progress)
     wall = time.time() - t0
     rgb = np.stack([frags[c] for c in "rgb"], -1).astype(np.uint8)
     rtl, cov = S.framebuffer(prep["size"], frags["x"], frags["y"], frags["depth"], rgb,
-                             scene["image"]["background"])
+                             prep["scene"]["image"]["background"])
+    return rtl, cov, frags, info, memory, wall
+
+
+def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=False,
+           hardware=None, mem_latency=12, mem_ready=1.0):
+    """Render a scene; writes the five files of scenes.md and returns the metrics.
+    ``hardware``: pipeline parameters that are not scene keys (``make tradeoffs``'s knobs:
+    the reciprocal, the power table's bits, fenney_dot's renormalisation). ``mem_latency``,
+    ``mem_ready``: the texture memory's latency and the chance each clock that it takes a
+    request and offers a response (``sim.stream.Memory``)."""
+    scene = S.load(scene_path)
+    if size:
+        scene["image"]["width"], scene["image"]["height"] = size
+        scene = S.parse({k: v for k, v in scene.items() if k != "name"}, scene["name"])
+    out_dir = Path(out_dir or BUILD / "render" / scene["name"])
+    out_dir.mkdir(parents=True, exist_ok=True)
+    prep = S.prepare(scene, hardware)
+    pipe, params = prep["pipeline"], prep["params"]
+    rtl, cov, frags, info, memory, wall = run_rtl(prep, simulator, mem_latency, mem_ready,
+                                                  None if quiet else f"scene {scene['name']}")
     model, mcov, n_model = S.model(prep)
     ref, rcov = S.reference(prep)
     save_png(out_dir / "rtl.png", rtl)
@@ -119,6 +128,8 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     metrics = {"scene": scene["name"], "method": params["method"],
                "bump": scene["bump"]["method"], "simulator": simulator,
                "size": list(prep["size"]), "triangles": prep["triangles"],
+               **({"mesh": S.obj.read(scene["mesh"]["file"]).counts}
+                  if scene["mesh"]["shape"] == "obj" else {}),
                "fragments": n, "fragments_model": n_model, "cycles": info["cycles"],
                "fragments_per_clock": round(n / info["cycles"], 4) if info["cycles"] else None,
                **({"memory": {"latency": mem_latency, "ready": mem_ready,

@@ -37,13 +37,12 @@ import statistics
 import sys
 import time
 from contextlib import contextmanager
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from .cli_common import UsageError, user_errors
+from .jobs import run
 from .verilog import BUILD, SCENES
 
 OUT = BUILD / "tradeoffs"
@@ -350,36 +349,11 @@ def measure(cfg, opts):
 def sweep(cfgs, opts, jobs=2, dask=None, quiet=False):
     """Every row, in ``cfgs``' order: on a local process pool, or on a Dask cluster (an
     address, or a ``distributed.Client``)."""
-    bar = tqdm(total=len(cfgs), desc="tradeoffs", unit="config", file=sys.stderr,
-               disable=quiet)
-    rows = [None] * len(cfgs)
-
-    def done(k, row):
-        rows[k] = row
-        bar.update(1)
-        bar.set_postfix_str(f"{row['knob']} {row['setting']}"
-                            + (" (cached)" if row.get("cached") else ""))
-
-    try:
-        if dask is None:
-            with ProcessPoolExecutor(jobs) as pool:
-                futs = {pool.submit(measure, c, opts): k for k, c in enumerate(cfgs)}
-                for fut in as_completed(futs):
-                    done(futs[fut], fut.result())
-        else:
-            from distributed import Client, as_completed as dask_completed
-            client = dask if isinstance(dask, Client) else Client(dask)
-            try:
-                futs = {client.submit(measure, c, opts, key=f"tradeoffs-{k}-{row_key(c, opts)}",
-                                      pure=False): k for k, c in enumerate(cfgs)}
-                for fut in dask_completed(list(futs)):
-                    done(futs[fut], fut.result())
-            finally:
-                if client is not dask:
-                    client.close()
-    finally:
-        bar.close()
-    return rows
+    return run(measure, [(c, opts) for c in cfgs], jobs, dask,
+               desc="tradeoffs", unit="config", quiet=quiet,
+               label=lambda r: f"{r['knob']} {r['setting']}" + (" (cached)" if r.get("cached")
+                                                                  else ""),
+               key=lambda k, t: f"tradeoffs-{k}-{row_key(*t)}")
 
 
 # ---- the report ------------------------------------------------------------------------------

@@ -135,13 +135,13 @@ def test_an_image_map_and_bad_maps(tmp_path):
 def test_scene_frames_follow_the_mesh(shape):
     """A scene's frames carry the mesh's rotation: their N is the mesh's own normal, and there
     is one frame and one (s, t) per vertex, the torus's running to ``repeat`` tiles."""
-    from golden.bump import frames, texcoords
-    from scene.driver import mesh, parse
+    from scene.driver import mesh, parse, tangent_frames, texcoords
     sc = parse({"mesh": {"shape": shape, "segments": [8, 6], "rotate": [30.0, -20.0, 75.0]}})
     pos, nrm, _ = mesh(sc)
-    T, B, N = frames(sc)
+    T, B, N = tangent_frames(sc)
     assert np.allclose(N, nrm) and np.allclose(np.cross(T, B), N)
-    uv = texcoords(sc)
+    uv, periodic = texcoords(sc)
+    assert periodic == (True, True)
     assert uv.shape == (len(pos), 2)
     if shape == "torus":
         assert np.allclose(uv.max(0), np.array(sc["bump"]["repeat"]) * [7 / 8, 5 / 6])
