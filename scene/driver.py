@@ -452,7 +452,12 @@ def _bump(scene, drawn, Ls, Hs, pipe):
         raise SceneError(f"bump.repeat: a triangle spans {span.max():.3g} tiles of the bump "
                          f"map (along {'st'[int(np.argmax(span[k]))]}); the raster carries "
                          f"texture coordinates in [-2, 2), so a triangle may span less than "
-                         f"one tile: use more mesh.segments or a smaller repeat")
+                         f"one tile: " + ("use more mesh.segments or a smaller repeat"
+                                          if scene["mesh"]["shape"] != "obj" else
+                                          "give the OBJ finer texture coordinates, or a "
+                                          "smaller repeat (without them, the cylindrical "
+                                          "projection wraps whole turns around the triangles "
+                                          "at the ends of its axis)"))
     frames = [f[drawn] for f in tangent_frames(scene)]                    # (n, 3, 3) each
     Nt = _unit(frames[2].sum(1))
     Tt = frames[0].sum(1)

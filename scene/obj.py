@@ -21,9 +21,12 @@ of the mesh, so a seam in the file's normals or texture coordinates stays a seam
 - **Normals where the file has none** (at a corner without ``vn``): the smooth normal of its
   position, the sum of the geometric normals (p1 - p0) x (p2 - p0) of every triangle that uses
   the position, so each weighted by its area, normalised.
-- **Texture coordinates where the file has none** (unless every corner has one): a cylindrical
-  projection about the model's y axis (the OBJ convention's up) through the centre of its
-  bounding box: s = atan2(x - cx, z - cz) / 2 pi + 1/2, t = (y - y_min) / (y_max - y_min).
+- **Texture coordinates where the file has none** (unless every corner has one, and they
+  span some area: a file whose corners all name one ``vt`` has none in effect): a cylindrical
+  projection about the longest axis of the model's bounding box (say y), through its centre:
+  s = atan2(x - cx, z - cz) / 2 pi + 1/2, t = (y - y_min) / (y_max - y_min) (the axes
+  cycled for the others: about x, atan2(z, y); about z, atan2(y, x)). The frames derived
+  from it are right-handed (T x B = N).
   s is then periodic (a triangle across the seam takes its vertices' s within half a turn of
   each other), t is not.
 """
@@ -155,19 +158,25 @@ def _mesh(corners, P, T, Nf, faces):
     length = np.linalg.norm(smooth, axis=-1, keepdims=True)
     smooth = np.where(length > 0, smooth / np.where(length > 0, length, 1), [0.0, 0.0, 1.0])
     nrm = np.where((ni >= 0)[:, None], Nf[np.maximum(ni, 0)] if len(Nf) else 0.0, smooth[vi])
-    if (ti >= 0).all():
+    given = (ti >= 0).all()
+    if given:
+        w = T[corners[..., 1]]
+        e1, e2 = w[:, 1] - w[:, 0], w[:, 2] - w[:, 0]
+        given = bool((np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]) > 0).any())
+    if given:
         uv, periodic = T[ti], (False, False)
     else:
         lo, hi = P.min(0), P.max(0)
-        c = (lo + hi) / 2
-        q = P[vi] - c
-        height = hi[1] - lo[1]
-        uv = np.stack([np.arctan2(q[:, 0], q[:, 2]) / (2 * np.pi) + 0.5,
-                       (P[vi, 1] - lo[1]) / height if height > 0 else 0 * q[:, 1]], -1)
+        a = int(np.argmax(hi - lo))                              # the axis
+        b, c = (a + 1) % 3, (a + 2) % 3                          # z, x about y (right-handed)
+        q = P[vi] - (lo + hi) / 2
+        t = (P[vi, a] - lo[a]) / (hi[a] - lo[a]) if hi[a] > lo[a] else 0 * q[:, a]
+        uv = np.stack([np.arctan2(q[:, c], q[:, b]) / (2 * np.pi) + 0.5, t], -1)
         periodic = (True, False)
     counts = {"positions": len(P), "normals": len(Nf), "texcoords": len(T), "faces": faces,
               "triangles": len(tris), "vertices": len(triples),
               "normals_from": "file" if (ni >= 0).all() else
                               "computed" if (ni < 0).all() else "file and computed",
-              "texcoords_from": "file" if not periodic[0] else "cylindrical projection"}
+              "texcoords_from": "file" if not periodic[0] else "cylindrical projection" + (
+                  "" if (ti < 0).any() else " (the file's span no area)")}
     return ObjMesh(P[vi], nrm, uv, tris, periodic, counts)

@@ -152,6 +152,11 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     if not quiet:
         rm, rr = metrics["rtl_vs_model"], metrics["rtl_vs_reference"]
+        if "mesh" in metrics:
+            c = metrics["mesh"]
+            print(f"{scene['name']}: {scene['mesh']['file']}: {c['triangles']:,} triangles "
+                  f"from {c['faces']:,} faces, normals from {c['normals_from']}, texture "
+                  f"coordinates from {c['texcoords_from']}")
         print(f"{scene['name']}: {drawn} triangles ({prep['triangles']['culled']} culled) -> "
               f"{n:,} fragments, {info['cycles']:,} cycles, {wall:.1f} s on {simulator}; "
               f"units: {', '.join(_names(u) for u in units)}\n"

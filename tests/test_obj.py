@@ -92,13 +92,13 @@ def test_cylindrical_projection_and_bump_frames(tmp_path):
     k = 32
     phi = 2 * np.pi * np.arange(k) / k
     ring = np.stack([np.sin(phi), np.zeros(k), np.cos(phi)], -1)
-    pos = np.concatenate([ring, ring + [0, 1, 0]])
+    pos = np.concatenate([ring, ring + [0, 3, 0]])                    # y the longest axis
     tris = [(a, (a + 1) % k, k + (a + 1) % k) for a in range(k)] + \
         [(a, k + (a + 1) % k, k + a) for a in range(k)]
     path = write_obj(tmp_path / "cyl.obj", pos, tris)
     m = obj.read(path)
     assert m.periodic == (True, False) and m.counts["texcoords_from"] == "cylindrical projection"
-    np.testing.assert_allclose(m.uv[:, 1], (m.pos[:, 1] > 0.5).astype(float))
+    np.testing.assert_allclose(m.uv[:, 1], (m.pos[:, 1] > 1.5).astype(float))
     sc = S.parse({"mesh": {"shape": "obj", "file": str(path)},
                   "bump": {"method": "fenney_polar", "repeat": [4.0, 0.5], "size": 64},
                   "image": {"width": 64, "height": 64}})
@@ -193,3 +193,17 @@ def test_shipped_model_through_the_rtl(tmp_path):
     for y, x in zip(*np.nonzero(np.abs(rtl.astype(int) - img.astype(int)).max(-1) > 1)):
         at = (out["x"] == x) & (out["y"] == y)
         assert (out["depth"][at] == out["depth"][at].max()).sum() > 1, (x, y)
+
+
+def test_bump_on_a_model_without_texture_coordinates_is_refused():
+    """Wuson's file names one texture coordinate for every corner (none, in effect): the
+    projection's s wraps whole turns around the triangles at the ends of its axis, beyond the
+    raster's range, so a bump method is a scene error saying what to give instead."""
+    sc = S.load(f"{SCENES}/wuson.toml")
+    sc["bump"].update(method="fenney_polar", size=128)
+    sc = S.parse({k: v for k, v in sc.items() if k != "name"})
+    assert obj.read(sc["mesh"]["file"]).counts["texcoords_from"] == \
+        "cylindrical projection (the file's span no area)"
+    with pytest.raises(S.SceneError, match="bump.repeat: .*give the OBJ finer texture "
+                                           "coordinates"):
+        S.prepare(sc)
