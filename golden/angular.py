@@ -197,7 +197,7 @@ def rotation_bounds(inp, method="paper", **params):
 
 
 def _paper_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
-                    prop_bits=12):
+                  prop_bits=12, iterations=None):
     """Per-row bounds on |RTL - rotation_float| in LSBs of the angle, by interval arithmetic.
 
     Every intermediate value of the datapath is carried as an interval that must hold the
@@ -265,53 +265,58 @@ def _paper_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8,
     return {"phi": phi_bound, "theta": theta_bound}
 
 
-def _exact_bounds(inp, angle_bits=12, trig_bits=14, asin_bits=12, atan_bits=8, prop_bits=12):
-    """Interval bounds of the exact variant, as _paper_bounds: cos theta' within
-    3 eps + eps**2 (the law of cosines, as illum), x' within 3 eps + eps**2 (s cos tN has
-    2 eps + eps**2, cos tA sin tN eps), y' within eps; theta' = acos through the asin table
-    (its error e_asin); |phi'| = asin(|y'| / sin theta') with 1/(2 sin theta') from the
-    reciprocal table over the interval of theta'."""
-    from hdl.rotation_unit.rotation import asin_lut, recip_sin_lut
+def _exact_bounds(inp, angle_bits=12, trig_bits=14, iterations=16, **_):
+    """Bounds of the exact variant (hdl/rotation_unit: x', y', z' from the cosine table, then
+    two vectoring CORDICs), in LSBs of the angle:
+
+    - the Cartesian values: z' = cos theta' and x' within 3 eps + eps**2 (the law of cosines,
+      as illum; s cos tN has 2 eps + eps**2, cos tA sin tN eps), y' within eps, eps the
+      cosine table's error; |z'| cut to 17 fraction bits before it is scaled by K (K itself
+      rounded to GAIN_FRAC bits: theta' moves by at most |K_q / K - 1| / 2);
+    - a perturbation d of a 2-D vector of length l turns its angle by at most asin(d / l)
+      (half a turn once d >= l): phi' = atan2(y', x') with l = r = sqrt(x'^2 + y'^2),
+      theta' = atan2(r, z') with l = 1;
+    - each CORDIC: the angle left after its last micro-rotation, atan(2**-(iterations - 1));
+      the micro-rotations' angles, each rounded to half an accumulator LSB; the datapath's
+      truncations, each shift below 2**-F in x and y, so the final vector within
+      iterations * sqrt 2 * K * 2**-F of its exact value, an angle of that over K l (for
+      CORDIC 1 it also lengthens r: theta's perturbation takes it);
+    - the output rounded to half an LSB."""
     from hdl.lut import quarter_cos_lut
+    from hdl.rotation_unit.rotation import (ANGLE_GUARD, CORDIC_FRAC, GAIN_FRAC, cordic_gain)
     lsb = 2 * np.pi / 2**angle_bits
     a = {k: turns(v, angle_bits) for k, v in inp.items()}
     pa, ta, pn, tn = a["phi_a"], a["theta_a"], a["phi_n"], a["theta_n"]
     eps = quarter_cos_lut(trig_bits, 1 << (angle_bits - 2)).max_error * 2.0**-trig_bits
-    table = asin_lut(asin_bits, angle_bits)
     d = pa - pn
-    cos_t = inner_product(pa, ta, pn, tn)
     x = np.sin(ta) * np.cos(d) * np.cos(tn) - np.cos(ta) * np.sin(tn)
     y = np.sin(ta) * np.sin(d)
-    e_c = 3 * eps + eps * eps
-    e_asin = table.error_over(np.abs(cos_t) - e_c, np.abs(cos_t) + e_c) * lsb
-    th_lo = np.arccos(np.clip(cos_t + e_c, -1, 1)) - e_asin
-    th_hi = np.arccos(np.clip(cos_t - e_c, -1, 1)) + e_asin
-    want = rotation_float(inp, angle_bits, "exact")
-    theta_model, phi_model = want["theta"] * lsb, want["phi"] * lsb
-    theta_bound = np.maximum(theta_model - th_lo, th_hi - theta_model) / lsb
-    recip = recip_sin_lut(angle_bits)
-    r_top, e_r = recip.contents[0] * recip.fmt.lsb, recip.max_error * recip.fmt.lsb
-    mn, mx = _range_abs_sin(th_lo, th_hi)
-    r_lo = np.minimum(1 / (2 * np.maximum(mx, 1e-300)), r_top) - e_r    # saturates at r_top
-    r_hi = np.minimum(1 / (2 * np.maximum(mn, 1e-300)), r_top) + e_r
-    y_lo, y_hi = y - eps, y + eps
-    ay_lo = np.where((y_lo <= 0) & (y_hi >= 0), 0.0, np.minimum(np.abs(y_lo), np.abs(y_hi)))
-    ay_hi = np.maximum(np.abs(y_lo), np.abs(y_hi))
-    ratio_lo = np.minimum(2 * ay_lo * np.maximum(r_lo, 0), 1)
-    ratio_hi = np.minimum(2 * ay_hi * r_hi, 1)
-    e_phi = table.error_over(ratio_lo, ratio_hi) * lsb
-    pm_lo, pm_hi = np.arcsin(ratio_lo) - e_phi, np.arcsin(ratio_hi) + e_phi
-    e_x = 3 * eps + eps * eps
-    phi_bound = _phi_arcs(phi_model, pm_lo, pm_hi, x - e_x < 0, x + e_x >= 0,
-                          y_lo < 0, y_hi >= 0) / lsb
-    return {"phi": phi_bound, "theta": theta_bound}
+    r = np.hypot(x, y)
+    k = cordic_gain(iterations)
+    e_x = e_z = 3 * eps + eps * eps
+    e_y = eps
+    datapath = iterations * np.sqrt(2) * k * 2.0**-CORDIC_FRAC     # a CORDIC's final vector
+    own = np.arctan(2.0**(1 - iterations)) \
+        + iterations * 0.5 * 2 * np.pi / 2**(angle_bits + ANGLE_GUARD)   # residual, table
+
+    def turned(dev, length):
+        return np.where(dev < length, np.arcsin(np.minimum(dev / np.maximum(length, 1e-300),
+                                                           1.0)), np.pi)
+
+    e_gain = abs(round(k * 2**GAIN_FRAC) / 2**GAIN_FRAC / k - 1) / 2
+    dev_r = np.hypot(e_x, e_y) + datapath / k
+    dev_z = e_z + 2.0**-17 + 2.0**-CORDIC_FRAC / k
+    theta_bound = turned(dev_r + dev_z, 1.0) + e_gain + own + datapath / k + 0.5 * lsb
+    phi_bound = np.minimum(turned(np.hypot(e_x, e_y), r) + own
+                           + datapath / (k * np.maximum(r, 1e-300)), np.pi) + 0.5 * lsb
+    return {"phi": np.minimum(phi_bound, np.pi) / lsb, "theta": theta_bound / lsb}
 
 
 # ---- bump_polar: two rotations and the illumination ------------------------------------------
 
 def _rotated(inp, vec, params):
     keep = {k: params[k] for k in ("method", "angle_bits", "trig_bits", "asin_bits", "atan_bits",
-                                   "prop_bits") if k in params}
+                                   "prop_bits", "iterations") if k in params}
     rows = {"phi_n": inp["phi_n"], "theta_n": inp["theta_n"], "phi_a": inp[f"phi_{vec}"],
             "theta_a": inp[f"theta_{vec}"]}
     return rotation_float(rows, **keep), rotation_bounds(rows, **keep)

@@ -62,6 +62,13 @@ def s(width, frac_bits=0, unit="1"):
     return Fixed(width, True, frac_bits, unit)
 
 
+def align(value, frac_from, frac_to):
+    """A fixed-point value of ``frac_from`` fraction bits with ``frac_to``: shifted left, or
+    right (truncated)."""
+    return value << (frac_to - frac_from) if frac_to >= frac_from else \
+        value >> (frac_from - frac_to)
+
+
 def binary_angle(bits):
     """An angle of ``bits`` bits in turns: raw / 2**bits of a full turn, wrapping."""
     return Fixed(bits, False, bits, "turn")

@@ -103,9 +103,11 @@ def configurations(quick=False, knobs=None):
         rows.append(_row("reciprocal", "divider" if recip == "divide" else f"NR {iters}",
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
                          default=(recip, iters) == ("newton", 2)))
-    # the rotation: method, angle bits, table address bits
+    # the rotation: method (the exact one's CORDIC iterations), angle bits, table address bits
     for label, p, scene in (("paper", {}, "bump_angular"),
                             ("exact", {"method": "exact"}, "bump_angular_exact"),
+                            ("exact, 12 iterations", {"method": "exact", "iterations": 12},
+                             None),
                             ("10-bit angles", {"angle_bits": 10, "trig_bits": 12,
                                                "asin_bits": 10}, None),
                             ("tables -2 bits", {"asin_bits": 10, "atan_bits": 6,

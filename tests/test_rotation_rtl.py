@@ -8,6 +8,8 @@ from golden import angular
 from hdl.rotation_unit.rotation import recip_sin_lut
 from sim.report import count
 
+from sim.simulators import available
+
 from .conftest import assert_golden, per_simulator, stream
 
 BITS = 12
@@ -102,13 +104,37 @@ def test_property_rows_stay_within_the_bound(rows):
 
 @pytest.mark.parametrize("method", ["paper", "exact"])
 def test_three_multipliers(method, tmp_path):
-    """Fig 7: three multipliers (the two ratios and the proportion); the exact variant keeps
-    to three (cos theta', s cos tN, |y'| / sin theta'). A product by the reciprocal table's
-    27-bit entries is cut into 18-bit slices (arith.products: one DSP each, registered on
-    both sides), so it counts as ceil(27 / 18) = 2 multipliers, both by the same operand."""
+    """Fig 7: three multipliers (the two ratios and the proportion). A product by the
+    reciprocal table's 27-bit entries is cut into 18-bit slices (arith.products: one DSP each,
+    registered on both sides), so it counts as ceil(27 / 18) = 2 multipliers, both by the same
+    operand. The exact variant keeps to three: cos theta' and s cos tN, and |z'| by the
+    CORDIC's gain K (a constant, in the block's register); its angles are shifts and adds."""
     c = count("rotation", {"method": method}, work=tmp_path)
-    slices = -(-recip_sin_lut(12).fmt.width // 18)
-    ratios = 2 if method == "paper" else 1                 # |num| / (2 sin), |num| / (2 cos)
-    assert slices == 2
-    assert c["mul"] == 3 + ratios * (slices - 1) and c["const_mul"] == 0
     assert all(max(map(int, w.split("x"))) <= 18 for w in c["mul_widths"])
+    if method == "exact":
+        assert c["mul"] == 3 and c["const_mul"] == 0
+        return
+    slices = -(-recip_sin_lut(12).fmt.width // 18)
+    assert slices == 2
+    assert c["mul"] == 3 + 2 * (slices - 1) and c["const_mul"] == 0
+
+
+@pytest.mark.xdist_group("verilator-rotation")
+@pytest.mark.skipif(bool(available("verilator")), reason=f"verilator: {available('verilator')}")
+def test_exact_variant_within_a_tenth_of_a_degree():
+    """A million random pairs (N and A on the hemisphere) through the exact variant on the
+    batch path (the model test_exact_variant_hard_cases builds): every rotated vector within
+    0.1 deg of the exact rotation of the same binary angles, and every angle within its
+    derived bound. The floor is the output's 12-bit angles: theta' and phi' each rounded to
+    half an LSB (0.044 deg), so up to 0.062 deg apart where both are off by that much."""
+    rows = random_hemisphere_rows(1_000_000, seed=5)
+    params = {"method": "exact"}
+    out, _ = stream("rotation", rows, "verilator", params)
+    assert_golden("rotation", rows, out, params)
+    want = angular.rotation_float(rows, method="exact")
+    lsb = 2 * np.pi / FULL
+    got = angular.to_vector(out["phi"] * lsb, out["theta"] * lsb)
+    ref = angular.to_vector(want["phi"] * lsb, want["theta"] * lsb)
+    err = np.degrees(np.arccos(np.clip((got * ref).sum(-1), -1, 1)))
+    assert err.max() <= 0.1, err.max()
+    assert err.max() > 0.044                     # not vacuous: the rounding floor is reached

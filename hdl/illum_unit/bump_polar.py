@@ -3,14 +3,16 @@ then the law-of-cosines illumination against the bump normal B from the bump map
 
 In ``phi_n theta_n phi_l theta_l phi_h theta_h phi_b theta_b``; out as ``illum``. The two
 rotations run one after the other on one pipeline (the H angles ride along through the first),
-so the latency is 2 x 21 + 11 and the throughput one vector pair per clock.
+so the latency is twice the rotation's (21 for the paper's, 44 for the exact one) + 11, and the
+throughput one vector pair per clock.
 """
 from ..rotation_unit import Rotation
 from ..unit import Unit
 from .illum import Illum
 
 # angles shared by both parts; each part keeps its own table parameters
-ROTATION_PARAMS = ("method", "angle_bits", "trig_bits", "asin_bits", "atan_bits", "prop_bits")
+ROTATION_PARAMS = ("method", "angle_bits", "trig_bits", "asin_bits", "atan_bits", "prop_bits",
+                   "iterations")
 
 
 class BumpPolar(Unit):

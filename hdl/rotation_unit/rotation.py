@@ -27,10 +27,11 @@ golden.angular.rotation_bounds, by interval arithmetic over every table's measur
 import functools
 
 import numpy as np
-from amaranth.hdl import Mux
+from amaranth.hdl import Const, Mux
 
-from ..fixed import Field, Fixed, binary_angle, u
+from ..fixed import Field, Fixed, align, binary_angle, u
 from ..arith import products
+from ..dsp import Product
 from ..lut import build_lut, float_address, float_bins, quarter_cos_lut, rom
 from ..trig import cos_address, signed_cos
 from ..unit import Unit
@@ -38,6 +39,20 @@ from ..unit import Unit
 RECIP_FRAC = 16          # 1/(2 sin a) and 1/(2 cos a): 16 fraction bits
 PROP_FRAC = 16           # theta_prop: 1.0 = 2**16
 ATAN_EXP_LO = 8          # the atan table's address: 2**-8 .. 2**(angle_bits - 2) in octaves
+CORDIC_FRAC = 20         # the exact rotation's CORDIC datapath: 20 fraction bits (x', y', z' < 1)
+ANGLE_GUARD = 8          # its angle accumulators: 8 bits below the output angle's LSB
+GAIN_FRAC = 11           # the CORDIC gain K in z' * K: 11 fraction bits
+
+
+def cordic_gain(iters):
+    """K = prod sqrt(1 + 2**-2i): a vectoring CORDIC of ``iters`` steps lengthens by it."""
+    return float(np.prod(np.sqrt(1 + 4.0 ** -np.arange(iters))))
+
+
+@functools.lru_cache(maxsize=None)
+def cordic_angles(iters, bits):
+    """atan(2**-i) in turns * 2**bits, rounded: the micro-rotations' angles."""
+    return tuple(int(round(np.arctan(2.0 ** -i) / (2 * np.pi) * 2**bits)) for i in range(iters))
 
 
 @functools.lru_cache(maxsize=None)
@@ -72,17 +87,25 @@ def prop_lut(addr_bits):
                      u(PROP_FRAC + 1, PROP_FRAC), domain=(0.0, 1.0))
 
 
+def addsub(a, b, sub):
+    """a + b, or a - b where ``sub``: one adder, b's bits inverted and ``sub`` its carry in
+    (a - b = a + ~b + 1)."""
+    return a + Mux(sub, ~b, b) + sub
+
+
 class Rotation(Unit):
     """Seed 003's vector rotation (or the exact one), one vector per clock, three multipliers."""
     NAME = "rotation"
     DOC = "Angular vector rotation: the published method (seed 003 §3.1, Fig 7) or exact"
     PARAMS = {"method": "paper", "angle_bits": 12, "trig_bits": 14, "asin_bits": 12,
-              "atan_bits": 8, "prop_bits": 12}
+              "atan_bits": 8, "prop_bits": 12, "iterations": 16}
 
     RANGES = {"method": ("paper", "exact"), "angle_bits": (6, 16), "trig_bits": (8, 16),
-              "asin_bits": (4, 16), "atan_bits": (2, 10), "prop_bits": (4, 16)}
+              "asin_bits": (4, 16), "atan_bits": (2, 10), "prop_bits": (4, 16),
+              "iterations": (4, 20)}
 
-    def validate(self, method, angle_bits, trig_bits, asin_bits, atan_bits, prop_bits):
+    def validate(self, method, angle_bits, trig_bits, asin_bits, atan_bits, prop_bits,
+                 iterations):
         if asin_bits > trig_bits + 1:
             raise ValueError(f"asin_bits must be at most trig_bits + 1 = {trig_bits + 1}, "
                              f"not {asin_bits}")
@@ -100,13 +123,16 @@ class Rotation(Unit):
 
     @property
     def latency(self):
-        return 21
+        """21 stages (the paper's); the exact rotation: 12 + a stage per micro-rotation."""
+        return 21 if self.params["method"] == "paper" else 12 + 2 * self.params["iterations"]
 
     @property
     def tables(self):
         n, p = self.params["angle_bits"], self.params
-        return {"trig": quarter_cos_lut(p["trig_bits"], 1 << (n - 2)),
-                "asin": asin_lut(p["asin_bits"], n), "recip": recip_sin_lut(n),
+        trig = {"trig": quarter_cos_lut(p["trig_bits"], 1 << (n - 2))}
+        if p["method"] == "exact":
+            return trig
+        return {**trig, "asin": asin_lut(p["asin_bits"], n), "recip": recip_sin_lut(n),
                 "atan": atan_lut(p["atan_bits"], n), "prop": prop_lut(p["prop_bits"])}
 
     def asin_address(self, magnitude, frac):
@@ -182,17 +208,22 @@ class Rotation(Unit):
         return {"phi": Mux(y_neg, -base, base)[:self.params["angle_bits"]]}
 
     def datapath_exact(self, p, v):
-        """Beyond the paper: the exact rotation by the law of cosines, from the same tables.
+        """Beyond the paper: the exact rotation, A' = Ry(-tN) Rz(-phiN) A, in Cartesian form
+        from the same cosine table, its angles by two vectoring CORDICs (shift and add):
 
-            cos theta' = 1/2 [cos(tA - tN) + cos(tA + tN)] + 1/2 [cos(tA - tN) - cos(tA + tN)] cos D
+            z' = cos theta' = 1/2 [cos(tA - tN) + cos(tA + tN)] + 1/2 [cos(tA - tN) - cos(tA + tN)] cos D
             x' = sin tA cos D cos tN - cos tA sin tN,  y' = sin tA sin D
-            theta' = acos(cos theta') = 90 - asin(cos theta'),  |phi'| = asin(|y'| / sin theta')
+            |phi'| = atan2(|y'|, |x'|), and K r = K sqrt(x'^2 + y'^2)          (CORDIC 1)
+            theta' from atan2(K r, K |z'|)                                    (CORDIC 2)
 
-        with 1/(2 sin theta') from the reciprocal table (theta' is an exact binary angle by
-        then) and phi' by quadrant from the signs of x' and y'. Three multipliers; latency 21.
-        """
+        phi' by quadrant from the signs of x' and y', theta' = 180 deg - that where z' < 0. An
+        angle from its tangent keeps its precision everywhere: the arcsine and arccosine of
+        the first version were steep where theta' -> 0 and |phi'| -> 90 deg (1.6 deg off
+        there, from 14-bit cosines). Three multipliers (two products, z' * K); latency
+        12 + 2 iterations (44 at the default 16)."""
         n, t = self.params["angle_bits"], self.params["trig_bits"]
         quarter, half = 1 << (n - 2), 1 << (n - 1)
+        F, iters = CORDIC_FRAC, self.params["iterations"]
         v = dict(v)
         p_n, t_a, p_a = v.pop("phi_n"), v["theta_a"], v.pop("phi_a")
         v = p.stage(v, d=p_a - p_n, _tp=t_a + (p_a - p_n), _tm=t_a - (p_a - p_n))
@@ -205,19 +236,50 @@ class Rotation(Unit):
         v = p.stage({**v, "s2": c["sx"] + c["sy"], "n2": c["cy"] - c["cx"],   # 2 sin tA cos D, 2 y'
                      "csum": c["cm"] + c["cp"], "cdiff": c["cm"] - c["cp"],
                      "ssum": c["sp"] + c["sm"], "cd": c["cd"], "cn": c["cn"]})  # 2 cos tA sin tN
-        v = p.stage(v, pc=v.pop("cdiff") * v.pop("cd"), px=v.pop("s2") * v.pop("cn"))
-        v = p.stage(v, c2=(v.pop("csum") << t) + v.pop("pc"),              # 2 cos theta', 2t bits
+        v = p.stage(v, pc=Product(v.pop("cdiff"), v.pop("cd")),         # MULT18X18D registers
+                    px=Product(v.pop("s2"), v.pop("cn")))
+        v = p.stage(v)
+        v = p.stage(v, c2=(v.pop("csum") << t) + v.pop("pc"),              # 2 z', 2t bits
                     x2=v.pop("px") - (v.pop("ssum") << t))                 # 2 x', 2t bits
         c2, x2, n2 = v.pop("c2"), v.pop("x2"), v.pop("n2")
-        v = p.stage(v, _ac=abs(c2), c_neg=c2 < 0, x_neg=x2 < 0, y_neg=n2 < 0, n_abs=abs(n2))
-        v = p.stage(v, _aa=self.asin_address(v.pop("_ac"), 2 * t + 1))
-        v = self.read(p, v, am=("asin", "_aa"))
-        am = v.pop("am")
-        v = p.stage(v, theta=Mux(v.pop("c_neg"), quarter + am, quarter - am)[:n])  # acos
-        theta = v["theta"]
-        v = p.stage(v, _af=Mux(theta > quarter, half - theta, theta))      # sin theta' = sin fold
-        v = self.read(p, v, r=("recip", "_af"))
-        v = products(p, v, {"ratio": ("n_abs", "r")})                      # |y'| / sin theta'
-        v = p.stage(v, _ar=self.asin_address(v.pop("ratio"), t + RECIP_FRAC))
-        v = self.read(p, v, pm=("asin", "_ar"))
-        return p.stage(v, **self.quadrant(v.pop("x_neg"), v.pop("y_neg"), v.pop("pm")))
+        z17 = align(abs(c2), 2 * t + 1, GAIN_FRAC + 6)                     # |z'|, 17 bits
+        v = p.stage(v, _x=align(abs(x2), 2 * t + 1, F), _y=align(abs(n2), t + 1, F),
+                    _z=z17[:GAIN_FRAC + 7], c_neg=c2 < 0, x_neg=x2 < 0, y_neg=n2 < 0)
+        k = int(round(cordic_gain(iters) * 2**GAIN_FRAC))
+        v = self.cordic(p, v, "_x", "_y", "_pm", carry={"_kz": Product(v.pop("_z"), Const(k, GAIN_FRAC + 1))})   # z' K
+        kz = v.pop("_kz")
+        v = p.stage(v, _pm=self.rounded(v.pop("_pm")), _x=align(kz, GAIN_FRAC + 17, F),
+                    _y=v.pop("_x"))                                        # (K |z'|, K r)
+        phi = self.quadrant(v.pop("x_neg"), v.pop("y_neg"), v.pop("_pm"))
+        v = self.cordic(p, v, "_x", "_y", "_tm", carry=phi)
+        v = p.stage(v, _tm=self.rounded(v.pop("_tm")))
+        tm = v.pop("_tm")
+        return p.stage(v, theta=Mux(v.pop("c_neg"), half - tm, tm)[:n])
+
+    @staticmethod
+    def rounded(acc):
+        """An accumulated angle to the output's binary angle, rounded to nearest."""
+        return (acc + (1 << (ANGLE_GUARD - 1))) >> ANGLE_GUARD
+
+    def cordic(self, p, v, x, y, angle, carry=None):
+        """A vectoring CORDIC, one micro-rotation a stage: (v[x], v[y]), x >= 0, turned onto
+        the x axis; ``v[angle]`` (new) accumulates the angle turned, atan2(y, x), in turns *
+        2**(angle_bits + ANGLE_GUARD); v[x] ends as K sqrt(x^2 + y^2). ``carry``: values
+        computed in the first stage beside it."""
+        n, F = self.params["angle_bits"], CORDIC_FRAC
+        width, awidth = F + 3, n + ANGLE_GUARD + 1                     # |x|, |y| < 4
+        fit = lambda e, w: e[:w].as_signed()
+        acc = None
+        for i, a in enumerate(cordic_angles(self.params["iterations"], n + ANGLE_GUARD)):
+            xv, yv = v.pop(x), v.pop(y)
+            xv, yv = xv.as_signed() if not xv.shape().signed else xv, \
+                yv.as_signed() if not yv.shape().signed else yv
+            up = yv < 0                                     # turn anticlockwise, or not
+            new = {x: fit(addsub(xv, yv >> i, up), width),     # x - y 2^-i where y < 0
+                   y: fit(addsub(yv, xv >> i, ~up), width),    # y - x 2^-i where y >= 0
+                   angle: fit(Mux(up, -a, a) if acc is None else acc + Mux(up, -a, a),
+                              awidth)}
+            v = p.stage(v, **new, **(carry if i == 0 and carry else {}))
+            acc = v.pop(angle)
+            v[angle] = acc
+        return v
