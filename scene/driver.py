@@ -58,7 +58,7 @@ DEFAULTS = {
                 "color": [1.0, 1.0, 1.0]}],
     "shading": {"method": "xshading", "specular": True, "power": "table"},
     "bump": {"method": "none", "map": "bricks", "size": 256, "repeat": [8.0, 2.0],
-             "depth": 1.0, "filter": "nearest", "rotation": "paper"},
+             "depth": 1.0, "filter": "nearest", "rotation": "paper", "renormalize": False},
     "turntable": {"spin": "light", "axis": [0.0, 0.0, 1.0], "degrees": 360.0, "frames": 24,
                   "frame": 0},
 }
@@ -85,7 +85,7 @@ RULES = {
     "bump": {"method": ("choice", BUMPS), "map": ("str",), "size": ("int", 16, 4096),
              "repeat": ("vec", 2, 1e-6, INF), "depth": ("num", 0.0, INF),
              "filter": ("choice", ("nearest", "bilinear")),
-             "rotation": ("choice", ("paper", "exact"))},
+             "rotation": ("choice", ("paper", "exact")), "renormalize": ("bool",)},
     "turntable": {"spin": ("choice", ("light", "mesh")), "axis": ("vec", 3, -INF, INF),
                   "degrees": ("num", -INF, INF), "frames": ("int", 1, 100000),
                   "frame": ("int", 0, 100000)},
@@ -156,6 +156,9 @@ def parse(data, name="scene", base=None):
         else:
             scene[key] = _table(key, data.get(key, {}), DEFAULTS[key], RULES[key])
     _mesh_file(scene["mesh"], base)
+    if scene["bump"]["renormalize"] and scene["bump"]["method"] != "fenney_xz":
+        raise SceneError(f"bump.renormalize: only with bump.method = \"fenney_xz\", not "
+                         f"{scene['bump']['method']!r}")
     turn = scene["turntable"]
     if not any(turn["axis"]):
         raise SceneError("turntable.axis: must not be the zero vector")
@@ -324,6 +327,8 @@ def pipeline_params(scene, bump_size=None, hardware=None):
         pipe.update(bump=b["method"], bump_size=bump_size or b["size"], filter=b["filter"])
         if b["method"] == "angular":
             pipe["rotation"] = b["rotation"]
+        if b["method"] == "fenney_xz" and b["renormalize"]:
+            pipe["normalize"] = True
     return {**ScenePipeline.PARAMS, **pipe}
 
 

@@ -66,6 +66,9 @@ BAD = [
     ("[bump]\nmethod = \"angular\"\nrotation = \"magic\"", "bump.rotation: must be one of paper, exact"),
     ("[image]\nwidth = 64\n[camera]\nfov_y = 180.0", "camera.fov_y: must be a finite number in 1..170"),
     ("\n".join(["[[lights]]"] * 5), "lights: 5 lights; the pipeline shades at most 4"),
+    ("[bump]\nmethod = \"fenney_polar\"\nrenormalize = true",
+     "bump.renormalize: only with bump.method = \"fenney_xz\""),
+    ("[turntable]\nspin = \"camera\"", "turntable.spin: must be one of light, mesh"),
     ("[bump]\nmethod = \"fenney_xz\"\n" + "\n".join(["[[lights]]"] * 2),
      "lights: 2 lights need 15 raster channels (depth, s, t, l0x, l0y, l0z, h0x"),
 ]

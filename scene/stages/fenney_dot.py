@@ -24,8 +24,8 @@ class FenneyDot(Stage):
 
     @property
     def params(self):
-        """The patent's plain dot product, or the bump vector renormalised (a hardware
-        choice, not a scene key: ``make tradeoffs`` sweeps it)."""
+        """The patent's plain dot product, or the bump vector renormalised (the scene's
+        ``bump.renormalize``; ``make tradeoffs`` also sweeps it as a hardware choice)."""
         return dict(normalize=self.q["normalize"], rsqrt_bits=self.q["rsqrt_bits"])
 
     @property
