@@ -47,6 +47,13 @@ def power_int(x, c):
     return lum + ((c * (q - lum)) >> 8)
 
 
+def power_float(x, c):
+    """P(X, C) on reals, X in [0, 1]: the patent's quadratic without its integer steps,
+    lum = max(0, 1 - (C + 8) (1 - X) / 8), P = lum + C (lum^2 - lum) / 256."""
+    lum = np.maximum(0.0, 1 - (np.asarray(c, float) + 8) * (1 - np.asarray(x, float)) / 8)
+    return lum + np.asarray(c, float) * (lum * lum - lum) / 256
+
+
 def power_exponent(c, x=np.arange(1, 1024)):
     """Which power x**n the approximation with concentration c stands for.
 

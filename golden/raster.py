@@ -88,12 +88,17 @@ _EDGE_OF = {(0, 1): "e01", (1, 0): "e01", (0, 2): "e02", (2, 0): "e02", (1, 2): 
             (2, 1): "e12"}
 
 
-def sorted_triangles(inputs, channels, sub_bits, groups=1):
+def sorted_triangles(inputs, channels, sub_bits, groups=1, real=None):
     """Sort each triangle's vertices (by y, then x), as the setup unit does; returns the order,
     the top vertex, x1 y1 x2 y2 (pixels), the sorted values per channel and, per group, the
-    edge constants (e12, e13, e23) in sorted labels."""
+    edge constants (e12, e13, e23) in sorted labels. ``real``: the same keys as ``inputs``
+    before rounding (in their raw units, as floats): the positions, values and edge
+    constants are taken from it, the order from ``inputs``."""
     x, y = _vertices(inputs)
     order = np.lexsort((x, y), axis=-1)
+    if real is not None:
+        inputs, x, y = real, *(np.stack([np.asarray(real[f"{a}{k}"], float) for k in range(3)],
+                                        -1) for a in "xy")
     xs, ys = np.take_along_axis(x, order, -1), np.take_along_axis(y, order, -1)
     scale = 2.0 ** -sub_bits
     rel = [(xs[:, k] - xs[:, 0]) * scale for k in (1, 2)], [(ys[:, k] - ys[:, 0]) * scale
@@ -101,7 +106,7 @@ def sorted_triangles(inputs, channels, sub_bits, groups=1):
     es = []
     for g in range(groups):
         names = edge_names(g)
-        edges = {n: np.asarray(inputs[m], np.int64) * EDGE.lsb
+        edges = {n: np.asarray(inputs[m], float) * EDGE.lsb
                  for n, m in zip(("e01", "e02", "e12"), names)}
         e = []
         for a, b in ((0, 1), (0, 2), (1, 2)):
@@ -112,30 +117,33 @@ def sorted_triangles(inputs, channels, sub_bits, groups=1):
         es.append(e)
     vals = []
     for ch in range(channels):
-        v = np.stack([np.asarray(inputs[f"v{ch}_{k}"], np.int64) for k in range(3)], -1)
+        v = np.stack([np.asarray(inputs[f"v{ch}_{k}"], float) for k in range(3)], -1)
         vals.append(np.take_along_axis(v, order, -1) * VALUE.lsb)
     return dict(x0=xs[:, 0] * scale, y0=ys[:, 0] * scale, x1=rel[0][0], y1=rel[1][0],
                 x2=rel[0][1], y2=rel[1][1], values=vals, e=es[0], groups=es)
 
 
 def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", groups="0", flat=0,
-        **_):
+        real=None, **_):
     """Fragments of every triangle: ``tri x y`` and ``v{k}`` (reals, saturated to the value
     range), in the order the RTL emits them (by triangle, row, column); each channel with its
-    group's edge constants; the ``flat`` words ``f{k}`` of each fragment's triangle."""
+    group's edge constants; the ``flat`` words ``f{k}`` of each fragment's triangle.
+    ``real``: the inputs before rounding (``sorted_triangles``): the same fragments, their
+    values from the unrounded positions, vertex values and edge constants, unsaturated (the
+    ideal model's)."""
     modes = parse_modes(modes, channels)
     groups = parse_groups(groups, channels)
     x, y = _vertices(inputs)
     tri, px, py = coverage(x, y, sub_bits, screen_bits)
     out = {"tri": tri, "x": px, "y": py,
            **{f"f{k}": np.asarray(inputs[f"f{k}"])[tri] for k in range(flat)}}
-    st = sorted_triangles(inputs, channels, sub_bits, max(groups) + 1)
+    st = sorted_triangles(inputs, channels, sub_bits, max(groups) + 1, real)
     X = px + 0.5 - st["x0"][tri]
     Y = py + 0.5 - st["y0"][tri]
     g = {k: st[k][tri] for k in ("x1", "y1", "x2", "y2")}
     with np.errstate(divide="ignore", invalid="ignore"):
         u, v = q.uv_of(g["x1"], g["y1"], g["x2"], g["y2"], X, Y)
-    lo, hi = VALUE.min * VALUE.lsb, VALUE.max * VALUE.lsb
+    lo, hi = (VALUE.min * VALUE.lsb, VALUE.max * VALUE.lsb) if real is None else (-np.inf, np.inf)
     for ch, mode in enumerate(modes):
         I = [st["values"][ch][:, k] for k in range(3)]
         uv = channel_uv(mode, I, st["groups"][groups[ch]])

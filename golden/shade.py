@@ -233,3 +233,15 @@ def _peercy_vectors(rng, n, rsqrt_bits=10):
         v /= np.linalg.norm(v, axis=1, keepdims=True)
         rnd.update({f"{name}{a}": np.rint(v[:, j] * (one - 1)) for j, a in enumerate("xyz")})
     return {k: np.concatenate([hard[k], rnd[k]]).astype(np.int64) for k in hard}
+
+
+def colour_float(scene, d, p):
+    """The colour sum of scenes.md in float: d (lights, n) clamped, p (lights, n) powers."""
+    mat = scene["material"]
+    col = np.array(mat["color"])
+    out = mat["ambient"] * col[None, :] + 0 * d[0][:, None]
+    for j, l in enumerate(scene["lights"]):
+        lc = np.array(l["color"])
+        out = out + lc * (mat["diffuse"] * np.clip(d[j], 0, 1)[:, None] * col
+                          + mat["specular"] * p[j][:, None])
+    return np.rint(255 * np.clip(out, 0, 1)).astype(np.uint8)

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from golden import angular, bump as bumps, fenney, raster as raster_model
+from golden import angular, bump as bumps, fenney, raster as raster_model, shade
 from golden.bump import rotation
 from hdl.setup_unit.formats import EDGE, VALUE, coord
 from hdl.shade_unit.formats import RGB
@@ -38,7 +38,7 @@ from .stage import lanes as lanes_of, raw
 from .stages.fenney_polar import pack
 from .stages.texture import ANGLE_BITS
 
-__all__ = ["SceneError", "load", "parse", "prepare", "rtl_inputs", "model", "reference",
+__all__ = ["SceneError", "load", "parse", "prepare", "rtl_inputs", "model", "ideal", "reference",
            "framebuffer", "DEFAULTS"]
 
 
@@ -373,14 +373,16 @@ def prepare(scene, hardware=None):
     vert = {"depth": zmin / zc, "nx": N[:, 0], "ny": N[:, 1], "nz": N[:, 2]}
     for j, (L, Hv) in enumerate(zip(Ls, Hs)):
         vert[f"d{j}"], vert[f"s{j}"] = N @ L, N @ Hv
-    inputs = {}
+    inputs, real = {}, {}           # real: the same before rounding (the ideal model's)
     S = 1 << sub_bits
     for c in range(3):
+        real[f"x{c}"], real[f"y{c}"] = sx[drawn[:, c]] * S, sy[drawn[:, c]] * S
         inputs[f"x{c}"] = np.rint(sx[drawn[:, c]] * S).astype(np.int64)
         inputs[f"y{c}"] = np.rint(sy[drawn[:, c]] * S).astype(np.int64)
     for name, (a, b) in (("e01", (0, 1)), ("e02", (0, 2)), ("e12", (1, 2))):
         dots = np.einsum("ij,ij->i", N[drawn[:, a]], N[drawn[:, b]])
         inputs[name] = np.minimum(raw((dots - 1) / 2, EDGE), 0)
+        real[name] = np.minimum((dots - 1) / 2, 0) / EDGE.lsb
     for ch, (name, _) in enumerate(spec.channels):
         for c in range(3):
             if name in ("s", "t"):
@@ -392,8 +394,10 @@ def prepare(scene, hardware=None):
             else:
                 val = vert[name][drawn[:, c]]
             inputs[f"v{ch}_{c}"] = raw(val, VALUE)
+            real[f"v{ch}_{c}"] = val / VALUE.lsb
     if bump:
         inputs.update({k: v for k, v in bump["constants"].items() if k.startswith("e")})
+        real.update(bump["real_edges"])
         for n, (t, k) in enumerate(bump["lanes"] if scene["bump"]["method"] == "fenney_polar"
                                    else ()):   # a lane's constants, its flat word
             inputs[f"f{n}"] = pack({c: bump["constants"][f"{t}{k}_{c}"]
@@ -408,7 +412,7 @@ def prepare(scene, hardware=None):
     texture = [s for s in spec.stages if hasattr(s, "image")]
     image = texture[0].image({"bump": bump}) if texture else None
     onchip = bool(texture) and texture[0].onchip
-    return {"scene": scene, "params": pipe, "pipeline": spec, "inputs": inputs,
+    return {"scene": scene, "params": pipe, "pipeline": spec, "inputs": inputs, "real": real,
             "memory": None if onchip else image,
             "load": host.writes(spec, uni, tables, image if onchip else None),
             "uniforms": uni, "size": (W, H),
@@ -468,9 +472,10 @@ def _bump(scene, drawn, Ls, Hs, pipe):
     Tt = frames[0].sum(1)
     Tt = _unit(Tt - np.einsum("ij,ij->i", Tt, Nt)[:, None] * Nt)
     Bt = np.cross(Nt, Tt)
-    consts = {}
+    consts, real_edges = {}, {}
     lanes = lanes_of(pipe)
-    out = {"st": st, "constants": consts, "lanes": lanes, "normals": normals,
+    out = {"st": st, "constants": consts, "real_edges": real_edges, "lanes": lanes,
+           "normals": normals,
            "frames": frames, "size": size, "filter": b["filter"], "texels": (hi, lo)}
     if b["method"] == "angular":
         # the normal's angles (seed 003: phi from x, theta from z) and the twist psi of the
@@ -512,6 +517,8 @@ def _bump(scene, drawn, Ls, Hs, pipe):
                 dots = np.einsum("ij,ij->i", vec[:, a], vec[:, c])
                 consts[f"e{name}_{1 + lanes.index((t, k))}"] = \
                     np.minimum(raw((dots - 1) / 2, EDGE), 0)
+                real_edges[f"e{name}_{1 + lanes.index((t, k))}"] = \
+                    np.minimum((dots - 1) / 2, 0) / EDGE.lsb
         return out
     for t, k in lanes:
         v = bumps.to_tangent((Ls if t == "l" else Hs)[k], Tt, Bt, Nt)
@@ -521,6 +528,7 @@ def _bump(scene, drawn, Ls, Hs, pipe):
         consts[f"{t}{k}_k2"] = np.rint(255 * np.sin(elev)).astype(np.int64)
         consts[f"{t}{k}_k3"] = np.rint(255 * np.cos(elev)).astype(np.int64)
         consts[f"{t}{k}_q"] = np.rint(rot / (2 * np.pi) * 256).astype(np.int64) % 256
+        out.setdefault("held", {})[f"{t}{k}"] = (elev, rot)      # the same, unrounded
     out["S"], out["R"] = hi, lo
     return out
 
@@ -545,18 +553,6 @@ def framebuffer(size, x, y, depth, rgb, background):
     img[y[win], x[win]] = rgb[win]
     cov[y[win], x[win]] = True
     return img, cov
-
-
-def _colour_float(scene, d, p):
-    """The colour sum of scenes.md in float: d (lights, n) clamped, p (lights, n) powers."""
-    mat = scene["material"]
-    col = np.array(mat["color"])
-    out = mat["ambient"] * col[None, :] + 0 * d[0][:, None]
-    for j, l in enumerate(scene["lights"]):
-        lc = np.array(l["color"])
-        out = out + lc * (mat["diffuse"] * np.clip(d[j], 0, 1)[:, None] * col
-                          + mat["specular"] * p[j][:, None])
-    return np.rint(255 * np.clip(out, 0, 1)).astype(np.uint8)
 
 
 def model(prep, **bound):
@@ -584,6 +580,21 @@ def run_models(prep, frag, ch, stages, **bound):
     for stage in stages:
         ch = stage.model(prep, frag, ch, bound)
     return ch
+
+
+def ideal(prep):
+    """The float ideal of the scene's pipeline: each stage's algorithm on reals with no
+    format (the stages' ``ideal``: unrounded inputs, exact functions for tables, no rounding
+    but the final colour's 8 bits), the same pixels and the depth test on its depth.
+    Returns (image, covered). Against the reference it is the method's own error; the RTL
+    against it, the formats'."""
+    stages = prep["pipeline"].stages
+    frag, ch = stages[0].ideal(prep)
+    for stage in stages[1:]:
+        ch = stage.ideal(prep, frag, ch)
+    rgb = np.stack([ch[c] for c in RGB], -1).astype(np.uint8)
+    return framebuffer(prep["size"], frag["x"], frag["y"], ch["depth"], rgb,
+                       prep["scene"]["image"]["background"])
 
 
 def bump_model(prep, frag, ch, **bound):
@@ -629,6 +640,6 @@ def reference(prep):
     d = [n @ L for L in fl["L"]]
     p = [np.maximum(0, n @ Hv) ** scene["material"]["shininess"] if q["specular"]
          else np.zeros(len(tri)) for Hv in fl["H"]]
-    rgb = _colour_float(scene, d, p)
+    rgb = shade.colour_float(scene, d, p)
     depth = (w * fl["inv_z"][tri]).sum(1)
     return framebuffer(prep["size"], px, py, depth, rgb, scene["image"]["background"])[:2]

@@ -86,6 +86,11 @@ class Stage:
     def rtl(self, p, v, uni):
         raise NotImplementedError
 
+    def ideal(self, prep, frag, ch):
+        """The stage's algorithm in float64 with no format: exact functions for its tables,
+        no rounding or saturation (``scene.driver.ideal``); values by name, reals."""
+        raise NotImplementedError(f"{self.name}: no ideal model")
+
     def build(self, m, i, o, v, uni, ports, host, platform=None):
         """The stage's logic between the handshakes ``i`` and ``o`` (``Link``s); returns
         ``(values, busy)``. By default its ``rtl`` on one shared-enable pipeline, whose

@@ -109,9 +109,11 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     rtl, cov, frags, info, memory, wall = run_rtl(prep, simulator, mem_latency, mem_ready,
                                                   None if quiet else f"scene {scene['name']}")
     model, mcov, n_model = S.model(prep)
+    ideal, icov = S.ideal(prep)
     ref, rcov = S.reference(prep)
     save_png(out_dir / "rtl.png", rtl)
     save_png(out_dir / "model.png", model)
+    save_png(out_dir / "ideal.png", ideal)
     save_png(out_dir / "reference.png", ref)
     vs_ref = compare(rtl, cov, ref, rcov)
     bump = scene["bump"]["method"]
@@ -148,7 +150,11 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
                                                               "within_1")},
                                     "flip": flip(rtl, ref, cov & rcov)},
                "model_vs_reference": {k: v for k, v in compare(model, mcov, ref, rcov).items()
-                                      if k in ("psnr_db", "max_abs")}}
+                                      if k in ("psnr_db", "max_abs")},
+               "ideal_vs_reference": {k: v for k, v in compare(ideal, icov, ref, rcov).items()
+                                      if k in ("psnr_db", "max_abs")},
+               "rtl_vs_ideal": {k: v for k, v in compare(rtl, cov, ideal, icov).items()
+                                if k in ("psnr_db", "max_abs")}}
     (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     if not quiet:
         rm, rr = metrics["rtl_vs_model"], metrics["rtl_vs_reference"]
@@ -162,9 +168,10 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
               f"units: {', '.join(_names(u) for u in units)}\n"
               f"  RTL vs model: max {rm['max_abs']} levels, {rm['pixels_over_1']} pixels over 1, "
               f"coverage mismatch {rm['coverage_mismatch']}; RTL vs reference: "
-              f"{rr['psnr_db']} dB (model: {metrics['model_vs_reference']['psnr_db']} dB), "
-              f"max {rr['max_abs']}, FLIP {rr['flip']}\n"
-              f"  wrote {', '.join(f'{out_dir}/{f}' for f in ('rtl.png', 'model.png', 'reference.png', 'diff.png', 'metrics.json'))}")
+              f"{rr['psnr_db']} dB (model: {metrics['model_vs_reference']['psnr_db']} dB, "
+              f"ideal: {metrics['ideal_vs_reference']['psnr_db']} dB), max {rr['max_abs']}, "
+              f"FLIP {rr['flip']}; RTL vs ideal {metrics['rtl_vs_ideal']['psnr_db']} dB\n"
+              f"  wrote {', '.join(f'{out_dir}/{f}' for f in ('rtl.png', 'model.png', 'ideal.png', 'reference.png', 'diff.png', 'metrics.json'))}")
     return metrics
 
 

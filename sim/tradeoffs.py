@@ -46,7 +46,7 @@ from .jobs import run
 from .verilog import BUILD, SCENES
 
 OUT = BUILD / "tradeoffs"
-FLOW = "tradeoffs-1"          # bump when a measurement changes: the row cache's key has it
+FLOW = "tradeoffs-2"          # bump when a measurement changes: the row cache's key has it
 ECP5_25F = {"LUT4": 24288, "FF": 24288, "MULT18X18D": 28, "DP16KD": 56}
 SHININESS = 32.0              # the default material's: what the power rows are measured at
 
@@ -226,6 +226,9 @@ def _image(cfg, simulator, key):
                quiet=True, hardware=cfg["hardware"] or None)
     rr = m["rtl_vs_reference"]
     return {"psnr_db": rr["psnr_db"], "max_abs": rr["max_abs"], "flip": rr["flip"],
+            "ideal_psnr_db": m["ideal_vs_reference"]["psnr_db"],
+            "model_psnr_db": m["model_vs_reference"]["psnr_db"],
+            "rtl_vs_ideal_db": m["rtl_vs_ideal"]["psnr_db"],
             "within_1_of_phong": rr["within_1"],
             "fragments": m["fragments"], "cycles": m["cycles"],
             "frags_per_clock": round(m["fragments"] / m["cycles"], 4),
@@ -379,7 +382,8 @@ def _fmt(v, nd=2):
 
 
 def table(rows):
-    head = ["knob", "setting", "PSNR dB", "max", "FLIP", "unit error max / p99 / mean",
+    head = ["knob", "setting", "PSNR dB", "ideal / model dB", "RTL vs ideal dB", "max", "FLIP",
+            "unit error max / p99 / mean",
             "latency", "frag/clk", "Fmax MHz", "ns/px", "LUT4", "FF", "MULT", "DP16KD",
             "fits 25F / UP5K", "render s", "unit test s"]
     out = ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
@@ -390,7 +394,9 @@ def table(rows):
                 else "–")
         out.append("| " + " | ".join([
             r["knob"], f"**{r['setting']}**" if r["default"] else r["setting"],
-            _fmt(r.get("psnr_db")), _fmt(r.get("max_abs")), _fmt(r.get("flip"), 4), err,
+            _fmt(r.get("psnr_db")),
+            f"{_fmt(r.get('ideal_psnr_db'))} / {_fmt(r.get('model_psnr_db'))}",
+            _fmt(r.get("rtl_vs_ideal_db")), _fmt(r.get("max_abs")), _fmt(r.get("flip"), 4), err,
             _fmt(r.get("latency")), _fmt(r.get("frags_per_clock"), 3), _fmt(r.get("fmax_mhz"), 1),
             _fmt(r.get("ns_per_pixel")), _fmt(r.get("LUT4")), _fmt(r.get("FF")),
             _fmt(r.get("MULT18X18D")), _fmt(r.get("DP16KD")), fits,
@@ -591,7 +597,10 @@ def write(rows, out, opts, wall):
           f"`python -m sim.tradeoffs` in {wall:.0f} s ({opts['seeds']} place-and-route seed(s), "
           f"renders on {opts['simulator']}). Image error: the RTL's render against the "
           "float64 reference (per-pixel Phong, exact power; exact bump shading), PSNR, "
-          "maximum (8-bit levels) and mean FLIP over covered pixels. Unit error: the knob's "
+          "maximum (8-bit levels) and mean FLIP over covered pixels; beside it the method's "
+          "float ideal (its algorithm with no format: the method's own error) and the float "
+          "model with the RTL's formats against the same reference, and the RTL against the "
+          "ideal (what the formats cost). Unit error: the knob's "
           "unit against its exact function, in the unit given in tradeoffs.json. Area: placed "
           "on ECP5-25F -6 (synthesis counts where it does not fit); a shading method's design is "
           "every unit of its pipeline, summed, its Fmax the slowest unit's. ns/px = cycles per "

@@ -152,7 +152,8 @@ def test_small_scene_rtl_matches_model(simulator, name, tmp_path):
     assert [u["name"] for u in m["units"]] == ["raster", "power_table", "colour"]
     assert abs(m["rtl_vs_reference"]["psnr_db"] - m["model_vs_reference"]["psnr_db"]) <= 1
     assert m["latency"] == ScenePipeline.spec(**m["pipeline"]["params"]).latency
-    for f in ("rtl.png", "model.png", "reference.png", "diff.png", "metrics.json"):
+    assert m["rtl_vs_ideal"]["psnr_db"] > 40 and m["ideal_vs_reference"]["psnr_db"] > 40
+    for f in ("rtl.png", "model.png", "ideal.png", "reference.png", "diff.png", "metrics.json"):
         assert (tmp_path / f).stat().st_size > 0
 
 
@@ -248,3 +249,54 @@ def test_fenney_concentration_fits_the_exponent():
     for n in (8.0, 32.0, 100.0):
         c = fenney.concentration_for(n)
         assert abs(math.log(power_exponent(c)[0] / n)) < 0.1, (n, c)
+
+
+def test_phong_ideal_is_the_reference():
+    """The float ideal of per-pixel Phong (the same affine normal, normalised exactly, the
+    exact power) is the reference itself: every pixel equal. So the ideal's machinery (the
+    unrounded raster inputs, each stage's exact function, the colour sum) adds nothing."""
+    prep = S.prepare(S.load(f"{SCENES}/phong.toml"))
+    img, cov = S.ideal(prep)
+    ref, rcov = S.reference(prep)
+    assert (cov == rcov).all() and (img == ref).all()
+
+
+def test_ideal_raster_is_the_quadratic_through_the_samples():
+    """The ideal raster's X-shading value at each pixel is the quadratic through the three
+    vertex values and the three mid-edge samples (seed 001 eq 27-32), evaluated here in its
+    barycentric (Lagrange) form at the exact pixel centre from the unrounded vertices:
+    a formulation independent of the setup's (u, v) map."""
+    from golden import quadratic as q
+    prep = S.prepare(S.load(f"{SCENES}/default.toml"))
+    raster = prep["pipeline"].stages[0]
+    frag, ch = raster.ideal(prep)
+    real, k = prep["real"], [n for n, _, _ in raster.all_channels].index("d0")
+    t = frag["tri"]
+    x = np.stack([real[f"x{c}"][t] for c in range(3)], -1) / 16
+    y = np.stack([real[f"y{c}"][t] for c in range(3)], -1) / 16
+    I = [real[f"v{k}_{c}"][t] * 2.0**-14 for c in range(3)]
+    e = [real[n][t] * 2.0**-15 for n in ("e01", "e02", "e12")]
+    mids = q.xshading_samples(*I, *e)[:, 3:]                        # m01, m02, m12
+    px, py = frag["x"] + 0.5, frag["y"] + 0.5
+    det = (x[:, 1] - x[:, 0]) * (y[:, 2] - y[:, 0]) - (x[:, 2] - x[:, 0]) * (y[:, 1] - y[:, 0])
+    w1 = ((px - x[:, 0]) * (y[:, 2] - y[:, 0]) - (x[:, 2] - x[:, 0]) * (py - y[:, 0])) / det
+    w2 = ((x[:, 1] - x[:, 0]) * (py - y[:, 0]) - (px - x[:, 0]) * (y[:, 1] - y[:, 0])) / det
+    w = [1 - w1 - w2, w1, w2]
+    want = sum(I[i] * w[i] * (2 * w[i] - 1) for i in range(3)) + 4 * (
+        mids[:, 0] * w[0] * w[1] + mids[:, 1] * w[0] * w[2] + mids[:, 2] * w[1] * w[2])
+    np.testing.assert_allclose(ch["d0"], want, atol=1e-9)
+
+
+@pytest.mark.parametrize("scene", ["default", "linear", "exact", "fenney_power", "bump_polar",
+                                   "bump_xz", "bump_angular_exact"])
+def test_ideal_splits_the_error(scene):
+    """ideal.png: the method's own error (ideal against the reference) and the formats'
+    (the model, with the RTL's formats, against the ideal). The formats never cost much of
+    a method whose own error is large: the ideal is at least the model less 0.5 dB."""
+    from sim.render import compare
+    prep = S.prepare(S.load(f"{SCENES}/{scene}.toml"))
+    img, cov, _ = S.model(prep)
+    idl, icov = S.ideal(prep)
+    ref, rcov = S.reference(prep)
+    own, fmt = compare(idl, icov, ref, rcov), compare(img, cov, ref, rcov)
+    assert own["coverage_mismatch"] == 0 and own["psnr_db"] >= fmt["psnr_db"] - 0.5

@@ -102,6 +102,22 @@ class BumpPolar(Stage):
         inp.update({k: np.full(len(inp["phi_n"]), prep["uniforms"][k]) for k in LIGHT})
         return inp
 
+    def ideal(self, prep, frag, ch):
+        """Seed 003 on reals: the interpolated phi_N, theta_N, the texel's exact polar angles
+        turned by psi, L and H rotated into N's frame by the scene's rotation (the paper's
+        or the exact one), the law of cosines, the exact power."""
+        turn = 2 * np.pi
+        pn, tn, psi = (ch[k] * turn for k in ("phin", "thetan", "psi"))
+        pb, tb = angular.to_polar(ch["_n"])
+        rotate = angular.rotate_paper if self.q["rotation"] == "paper" else angular.rotate_exact
+        dots = []
+        for vec in (prep["float"]["L"][0], prep["float"]["H"][0]):
+            pv, tv = angular.to_polar(vec)
+            pr, tr = rotate(pn, tn, np.full_like(pn, pv), np.full_like(pn, tv))
+            dots.append(np.clip(angular.inner_product(pr, tr, pb + psi, tb), 0, 1))
+        ch = {k: x for k, x in ch.items() if k not in ("phin", "thetan", "psi", "_n")}
+        return {**ch, "d0": dots[0], "p0": dots[1] ** self.shininess(prep["scene"])}
+
     def model(self, prep, frag, ch, bound):
         """``golden.angular.bump_polar_float`` (rotations paper or exact, the illumination's
         tables), rounded to its u16 outputs; d = diffuse >> 1 (a value), p = specular >> 5."""

@@ -36,6 +36,14 @@ class Colour(Stage):
     def latency(self):
         return Unit.spec(**self.params).latency
 
+    def ideal(self, prep, frag, ch):
+        """The colour sum of scenes.md on reals (d clamped, p as given), rounded to 8 bits."""
+        q = self.q
+        d = [ch[f"d{k}"] for k in range(q["lights"])]
+        p = [ch[f"p{k}"] if q["specular"] else np.zeros(len(d[0])) for k in range(q["lights"])]
+        rgb = shade.colour_float(prep["scene"], d, p)
+        return {**ch, **{c: rgb[:, k].astype(np.int64) for k, c in enumerate(RGB)}}
+
     def rtl(self, p, v, uni):
         return colour_lanes(p, {**v, **{f.name: uni[f.name] for f in self.uniforms}},
                             self.q["lights"], self.q["specular"])

@@ -53,6 +53,18 @@ class FenneyDot(Stage):
             v[lane_key(t, k)] = Cat(Const(0, 4), v.pop(f"_x{t}{k}"), Const(0, 2)).as_signed()
         return v
 
+    def ideal(self, prep, frag, ch):
+        """Each lane's interpolated vector (not renormalised, as the patent's) dotted with the
+        bump vector (L1 length 1, or unit where renormalised), h = 1."""
+        ch = dict(ch)
+        b = np.stack([ch.pop(a) for a in "xyz"], -1)
+        if self.q["normalize"]:
+            b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+        for t, k in self.lanes:
+            lv = np.stack([ch.pop(f"{t}{k}{a}") for a in "xyz"], -1)
+            ch[lane_key(t, k)] = (b * lv).sum(-1)
+        return ch
+
     def model(self, prep, frag, ch, bound):
         """Each lane's vector as the patent's s8 (round(127 v), clamped to +-127, from its raw
         value), dotted (``golden.fenney.dot_float``, h = 1, plain or renormalised), rounded to

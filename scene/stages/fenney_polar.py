@@ -56,6 +56,21 @@ class FenneyPolar(Stage):
             v[lane_key(t, k)] = Cat(i[2:8], i, Const(0, 2)).as_signed()
         return v
 
+    def ideal(self, prep, frag, ch):
+        """The texel's S and R exact (from the normal), each lane's light held per triangle
+        unrounded (elevation, clamped at the horizon, and rotation): k2 sin S + k3 cos S
+        cos(R - Q) with k2 = sin, k3 = cos of the elevation (eq 1-4, h = 1)."""
+        ch = dict(ch)
+        n = ch.pop("_n")
+        s_ang = np.arcsin(np.clip(n[:, 2], 0.0, 1.0))
+        r_ang = np.arctan2(n[:, 1], n[:, 0])
+        for t, k in self.lanes:
+            ch.pop(f"_k{t}{k}")
+            elev, rot = (x[frag["tri"]] for x in prep["bump"]["held"][f"{t}{k}"])
+            ch[lane_key(t, k)] = np.clip(np.sin(elev) * np.sin(s_ang) + np.cos(elev)
+                                         * np.cos(s_ang) * np.cos(r_ang - rot), 0, 1)
+        return ch
+
     def model(self, prep, frag, ch, bound):
         """``golden.fenney.polar_float`` rounded, per lane; d and s as the RTL widens the
         intensity. ``bound``: ``offset`` ``{key: n}`` added to a lane's intensity before it

@@ -48,6 +48,17 @@ class Phong(Stage):
         return phong_lanes(p, {**v, **{f.name: uni[f.name] for f in self.uniforms}},
                            unit.vectors(), self.q["rsqrt_iters"])
 
+    def ideal(self, prep, frag, ch):
+        """The interpolated normal normalised exactly, dotted with L and H (seed 000 eq 33)."""
+        ch = dict(ch)
+        n = np.stack([ch.pop(k) for k in ("nx", "ny", "nz")], -1)
+        n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+        for j, (L, H) in enumerate(zip(prep["float"]["L"], prep["float"]["H"])):
+            ch[f"d{j}"] = n @ L
+            if self.q["specular"]:
+                ch[f"s{j}"] = n @ H
+        return ch
+
     def model(self, prep, frag, ch, bound):
         ch = dict(ch)
         inp = {k: raw(ch.pop(k)) for k in ("nx", "ny", "nz")}

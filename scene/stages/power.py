@@ -78,6 +78,15 @@ class Power(Stage):
             v[f"_fc{k}"] = uni["conc"]
         return fenney_lanes(p, v, [(f"_fx{k}", f"_fc{k}", f"p{k}") for k in lights])
 
+    def ideal(self, prep, frag, ch):
+        """max(0, s)^n exactly, or the patent's approximation on reals (its concentration)."""
+        ch = dict(ch)
+        for k in range(self.q["lights"]):
+            s = np.clip(ch.pop(f"s{k}"), 0, 1)
+            ch[f"p{k}"] = s ** shininess(prep["scene"]) if self.q["power"] == "table" else \
+                fenney.power_float(s, concentration(prep["scene"]))
+        return ch
+
     def model(self, prep, frag, ch, bound):
         q, ch = self.q, dict(ch)
         for k in range(q["lights"]):

@@ -59,10 +59,15 @@ class Raster(Stage):
         out.update({f"f{k}": name for k, name in enumerate(self.flat_names)})
         return out
 
-    def model(self, prep, frag=None, ch=None, bound=None):
+    def model(self, prep, frag=None, ch=None, bound=None, real=None):
         """The raster's float model on the scene: its fragments, and the values by name (the
-        channels, reals; the flat words, integers)."""
-        frag = raster_model.run(prep["inputs"], **self.params)
+        channels, reals; the flat words, integers). ``real``: from the unrounded inputs."""
+        frag = raster_model.run(prep["inputs"], **self.params, real=real)
         ch = {name: frag[f"v{k}"] for k, (name, _, _) in enumerate(self.all_channels)}
         ch.update({name: np.asarray(frag[f"f{k}"]) for k, name in enumerate(self.flat_names)})
         return frag, ch
+
+    def ideal(self, prep, frag=None, ch=None):
+        """The same pixels, each channel's interpolation (linear, X-shading's or exact
+        mid-edges) from the unrounded positions, vertex values and edge constants."""
+        return self.model(prep, real=prep["real"])

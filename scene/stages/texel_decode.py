@@ -1,4 +1,6 @@
 """The texel_decode stage (seed 004, second embodiment): the X/Z codes to the bump vector."""
+import numpy as np
+
 from golden import fenney
 from hdl.illum_unit.texel_decode import TexelDecode as Unit
 
@@ -20,6 +22,14 @@ class TexelDecode(Stage):
         v = Unit.spec().datapath(p, v)
         v.pop("invalid")             # decoded by the guard's rule (docs/bump.md)
         return v
+
+    def ideal(self, prep, frag, ch):
+        """The normal as the patent's X/Z texel holds it, unrounded: in its axes (x along T,
+        y out, z along B), of L1 length 1."""
+        ch = dict(ch)
+        n = ch.pop("_n")[:, [0, 2, 1]]
+        n = n / np.abs(n).sum(-1, keepdims=True)
+        return {**ch, **{a: n[:, k] for k, a in enumerate("xyz")}}
 
     def model(self, prep, frag, ch, bound):
         out = fenney.texel_decode(ch.pop("_hi"), ch.pop("_lo"))

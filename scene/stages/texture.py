@@ -11,6 +11,7 @@
 The texels are data: the driver encodes them from the scene's map (``golden.bump``) into the
 memory image, in one layout for both (``hdl.texture_unit.memory_image``); the hardware depends
 only on the map's size, the filter, the memory and the cache."""
+import numpy as np
 from amaranth.lib import stream
 from amaranth.lib.wiring import In, Out
 
@@ -184,6 +185,13 @@ class Texture(Stage):
         """The texture memory's words (``hdl.texture_unit.memory_image``'s layout)."""
         hi, lo = prep["bump"]["texels"]
         return memory_image(hi, lo, self.bits, self.q["filter"])
+
+    def ideal(self, prep, frag, ch):
+        """The map's exact normal (tangent frame, before any texel encoding) at the texture
+        coordinates, nearest or bilinear as the texels (``golden.bump.sample``)."""
+        b = prep["bump"]
+        st = np.stack([ch["s"], ch["t"]], -1)
+        return {**ch, "_n": bumps.sample(b["normals"], st, self.q["filter"])}
 
     def model(self, prep, frag, ch, bound):
         """The codes ``_hi``, ``_lo`` (``golden.bump.fetch``: nearest, or the bilinear filter
