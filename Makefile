@@ -88,6 +88,7 @@ texcache: setup
 # Method errors (Fenney units, seed 003's rotation) with plots in build/accuracy/.
 accuracy: setup
 	$(PY) -m golden.accuracy
+	$(PY) -m sim.losses
 
 # The setup's reciprocal: Newton-Raphson steps or the divider, clocks against accuracy.
 recip-cost: setup

@@ -29,7 +29,7 @@ import numpy as np
 from golden import angular, bump as bumps, fenney, raster as raster_model, shade
 from golden.bump import rotation
 from hdl.setup_unit.formats import EDGE, VALUE, coord
-from hdl.shade_unit.formats import RGB
+from hdl.shade_unit.formats import POWER, RGB
 from hdl.texture_unit import MAX_TEXTURE
 
 from . import host, obj
@@ -582,19 +582,64 @@ def run_models(prep, frag, ch, stages, **bound):
     return ch
 
 
-def ideal(prep):
+FORMAT_GROUPS = {"raster": "raster", "texture": "texels", "texel_decode": "texels",
+                 "phong": "shading", "fenney_dot": "shading", "fenney_polar": "shading",
+                 "bump_polar": "shading", "colour": "colour"}      # the rest: "power"
+
+
+def ideal(prep, formats=()):
     """The float ideal of the scene's pipeline: each stage's algorithm on reals with no
     format (the stages' ``ideal``: unrounded inputs, exact functions for tables, no rounding
     but the final colour's 8 bits), the same pixels and the depth test on its depth.
     Returns (image, covered). Against the reference it is the method's own error; the RTL
-    against it, the formats'."""
+    against it, the formats'.
+
+    ``formats``: groups of stages run as their models instead, with the RTL's formats (raster,
+    texels, shading, power, colour: ``FORMAT_GROUPS``), so each group's own loss can be
+    measured (``sim.losses``); all of them give the model's image."""
     stages = prep["pipeline"].stages
-    frag, ch = stages[0].ideal(prep)
-    for stage in stages[1:]:
-        ch = stage.ideal(prep, frag, ch)
+    modes = ["model" if FORMAT_GROUPS.get(s.name, "power") in formats else "ideal"
+             for s in stages]
+    frag, ch = stages[0].model(prep) if modes[0] == "model" else stages[0].ideal(prep)
+    for stage, mode, was in zip(stages[1:], modes[1:], modes):
+        ch = _as(prep, ch, mode) if mode != was else ch
+        ch = stage.model(prep, frag, ch, {}) if mode == "model" else stage.ideal(prep, frag, ch)
     rgb = np.stack([ch[c] for c in RGB], -1).astype(np.uint8)
     return framebuffer(prep["size"], frag["x"], frag["y"], ch["depth"], rgb,
                        prep["scene"]["image"]["background"])
+
+
+def _as(prep, ch, mode):
+    """Values between a stage's model and the next stage's ideal (or back): the power in
+    POWER LSBs or real; the decoded X/Z vector of L1 length 255 or 1; the texel codes (S/R,
+    or polar angles in turns * 2**12) or the normal they hold."""
+    ch, ideal = dict(ch), mode == "ideal"
+    kind = prep["scene"]["bump"]["method"]
+    for k in [k for k in ch if k[0] == "p" and k[1:].isdigit()]:
+        ch[k] = ch[k] * POWER.lsb if ideal else np.rint(ch[k] / POWER.lsb).astype(np.int64)
+    if "x" in ch and "y" in ch and "z" in ch:
+        for a in "xyz":
+            ch[a] = ch[a] / 255.0 if ideal else ch[a] * 255.0
+    if ideal and "_hi" in ch:
+        hi, lo = np.asarray(ch.pop("_hi"), float), np.asarray(ch.pop("_lo"), float)
+        if kind == "fenney_polar":
+            s_ang, r_ang = hi / 256 * (np.pi / 2), lo / 256 * (2 * np.pi)
+            ch["_n"] = np.stack([np.cos(s_ang) * np.cos(r_ang), np.cos(s_ang) * np.sin(r_ang),
+                                 np.sin(s_ang)], -1)
+        else:
+            turn = 2 * np.pi / (1 << ANGLE_BITS)
+            ch["_n"] = angular.to_vector(lo * turn, hi * turn)
+    elif not ideal and "_n" in ch:
+        n = ch.pop("_n")
+        if kind == "fenney_polar":
+            ch["_hi"] = np.arcsin(np.clip(n[:, 2], 0, 1)) / (np.pi / 2) * 256
+            ch["_lo"] = np.mod(np.arctan2(n[:, 1], n[:, 0]) / (2 * np.pi) * 256, 256)
+        else:
+            phi, theta = angular.to_polar(n)
+            scale = (1 << ANGLE_BITS) / (2 * np.pi)
+            ch["_hi"], ch["_lo"] = (np.rint(a * scale).astype(np.int64) % (1 << ANGLE_BITS)
+                                    for a in (theta, phi))
+    return ch
 
 
 def bump_model(prep, frag, ch, **bound):

@@ -17,9 +17,10 @@ from amaranth.hdl import Mux
 from ..dsp import Product
 from ..fixed import Field
 from ..unit import Unit
+from ..setup_unit.formats import VALUE
 from .formats import COEF, LEVEL, ONE, POWER, RGB, colour_fields, light_fields
 
-FRAC = 24           # the sum's fraction bits: COEF (10) + VALUE (14)
+FRAC = COEF.frac_bits + VALUE.frac_bits   # the sum's fraction bits
 
 
 def colour_terms(lights, specular):
