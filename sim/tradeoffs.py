@@ -135,6 +135,9 @@ def configurations(quick=False, knobs=None):
     for f in ("nearest", "bilinear"):
         rows.append(_row("filter", f, [["scene", _scene_params("bump_xz", {"filter": f})]],
                          scene="bump_xz", hardware={"filter": f}, default=f == "bilinear"))
+    # Fenney's first embodiment (its other bump methods are the fenney_dot and rotation rows)
+    rows.append(_row("bump method", "fenney_polar", [["fenney_polar", {}]], scene="bump_polar",
+                     default=True))
     # seed 003's comparison: the Cartesian baseline (Peercy) beside the angular pipeline
     rows.append(_row("bump architecture", "Cartesian (Peercy)", [["peercy", {}]],
                      unit={"name": "peercy", "params": {}, "rows": 20000}))
