@@ -12,7 +12,7 @@ import numpy as np
 from amaranth.hdl import signed, unsigned
 from amaranth.lib import data
 
-__all__ = ["Fixed", "Field", "layout", "FieldError", "check_arrays"]
+__all__ = ["Fixed", "Field", "layout", "FieldError", "check_arrays", "align"]
 
 
 class FieldError(ValueError):

@@ -27,7 +27,7 @@ golden.angular.rotation_bounds, by interval arithmetic over every table's measur
 import functools
 
 import numpy as np
-from amaranth.hdl import Const, Mux
+from amaranth.hdl import Cat, Const, Mux
 
 from ..fixed import Field, Fixed, align, binary_angle, u
 from ..arith import products
@@ -246,7 +246,8 @@ class Rotation(Unit):
         v = p.stage(v, _x=align(abs(x2), 2 * t + 1, F), _y=align(abs(n2), t + 1, F),
                     _z=z17[:GAIN_FRAC + 7], c_neg=c2 < 0, x_neg=x2 < 0, y_neg=n2 < 0)
         k = int(round(cordic_gain(iters) * 2**GAIN_FRAC))
-        v = self.cordic(p, v, "_x", "_y", "_pm", carry={"_kz": Product(v.pop("_z"), Const(k, GAIN_FRAC + 1))})   # z' K
+        v = self.cordic(p, v, "_x", "_y", "_pm",                             # z' K beside it
+                        carry={"_kz": Product(v.pop("_z"), Const(k, GAIN_FRAC + 1))})
         kz = v.pop("_kz")
         v = p.stage(v, _pm=self.rounded(v.pop("_pm")), _x=align(kz, GAIN_FRAC + 17, F),
                     _y=v.pop("_x"))                                        # (K |z'|, K r)
@@ -271,9 +272,8 @@ class Rotation(Unit):
         fit = lambda e, w: e[:w].as_signed()
         acc = None
         for i, a in enumerate(cordic_angles(self.params["iterations"], n + ANGLE_GUARD)):
-            xv, yv = v.pop(x), v.pop(y)
-            xv, yv = xv.as_signed() if not xv.shape().signed else xv, \
-                yv.as_signed() if not yv.shape().signed else yv
+            xv, yv = (u if u.shape().signed else Cat(u, Const(0, 1)).as_signed()  # zero-extended
+                      for u in (v.pop(x), v.pop(y)))
             up = yv < 0                                     # turn anticlockwise, or not
             new = {x: fit(addsub(xv, yv >> i, up), width),     # x - y 2^-i where y < 0
                    y: fit(addsub(yv, xv >> i, ~up), width),    # y - x 2^-i where y >= 0
