@@ -67,3 +67,15 @@ def test_local_pool_and_dask_cluster_give_the_same_frames(tmp_path):
     assert gif.n_frames == 3 and gif.size == (2 * 64, 64 + 14)
     for f in ("psnr.png", "strip.png", "turntable.json"):
         assert (tmp_path / f).stat().st_size > 0
+
+
+def test_bad_arguments_exit_2_without_a_traceback():
+    import subprocess
+    import sys
+    for args, message in ((["--frames", "0"], "--frames: must be 1 or more"),
+                          (["--size", "abc"], "--size: must be WxH"),
+                          (["--methods", "gouraud"], "shading.method: must be one of"),
+                          (["--size", "8x8"], "image.width: must be an integer in 16..1024")):
+        r = subprocess.run([sys.executable, "-m", "sim.turntable", *args], capture_output=True,
+                           text=True)
+        assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr, r.stderr
