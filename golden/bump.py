@@ -21,6 +21,7 @@ Conventions (stated here once, used by the models and the hardware's tables):
   tangent-frame normal.
 """
 import math
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -255,13 +256,14 @@ def texel_file(path):
     try:
         with np.load(path) as f:
             tx, tz = (np.asarray(f[k]) for k in ("texel_x", "texel_z"))
-    except (OSError, ValueError, KeyError) as e:
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as e:
         raise BumpError(f"bump.map: {path!r} is not an .npz of texel_x and texel_z ({e})") \
             from None
-    if tx.shape != tz.shape or tx.ndim != 2 or not ((0 <= tx) & (tx <= 255)).all() \
+    if tx.shape != tz.shape or tx.ndim != 2 or tx.dtype.kind not in "iu" \
+            or tz.dtype.kind not in "iu" or not ((0 <= tx) & (tx <= 255)).all() \
             or not ((0 <= tz) & (tz <= 255)).all():
         raise BumpError(f"bump.map: {path!r}: texel_x and texel_z must be equal 2-D arrays of "
-                        f"codes 0..255")
+                        f"integer codes 0..255")
     return tx.astype(np.int64), tz.astype(np.int64)
 
 

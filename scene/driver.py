@@ -166,7 +166,11 @@ def parse(data, name="scene", base=None):
         raise SceneError(f"turntable.frame: must be below turntable.frames ({turn['frames']}), "
                          f"not {turn['frame']}")
     cam = scene["camera"]
-    f = np.subtract(cam["target"], cam["eye"])
+    with np.errstate(over="ignore"):
+        f = np.subtract(cam["target"], cam["eye"])
+    if not np.isfinite(f).all():
+        raise SceneError("camera.eye: its distance to camera.target overflows (keep the "
+                         "coordinates below 1e300)")
     if not np.linalg.norm(f) > 0:
         raise SceneError("camera.target: must differ from camera.eye")
     if not np.linalg.norm(np.cross(f, cam["up"])) > 1e-9 * np.linalg.norm(f):
@@ -257,12 +261,18 @@ def mesh(scene):
         tris = _grid_triangles(m + 1, n + 1, False, False)
     pos, nrm = pos.reshape(-1, 3), nrm.reshape(-1, 3)
     rot = orientation(scene)
-    pos = pos @ rot.T * msh["scale"] + np.array(msh["translate"])
+    with np.errstate(over="ignore", invalid="ignore"):
+        pos = pos @ rot.T * msh["scale"] + np.array(msh["translate"])
+        # drop triangles with a repeated vertex (the sphere's poles)
+        p = pos[tris]
+        area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=-1)
+        least = 1e-12 * max(1.0, np.abs(pos).max()) ** 2          # numpy's: inf, no raise
+    if not (np.isfinite(area).all() and np.isfinite(least)):
+        raise SceneError(f"mesh.scale, mesh.translate: the mesh's coordinates (up to "
+                         f"{float(np.abs(pos).max()):.3g}) overflow in its areas; keep them "
+                         f"below 1e150")
     nrm = nrm @ rot.T
-    # drop triangles with a repeated vertex (the sphere's poles)
-    p = pos[tris]
-    area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=-1)
-    return pos, nrm, tris[area > 1e-12 * max(1.0, float(np.abs(pos).max()) ** 2)]
+    return pos, nrm, tris[area > least]
 
 
 def turn(scene):
@@ -310,7 +320,11 @@ def tangent_frames(scene):
 
 
 def _unit(v):
+    """``v`` over its length, scaled first by its largest component, so that neither a tiny
+    (1e-300) nor a huge (1e300) vector underflows or overflows in the squares."""
     v = np.asarray(v, float)
+    m = np.abs(v).max(axis=-1, keepdims=True)
+    v = v / np.where(m > 0, m, 1.0)
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
@@ -442,8 +456,11 @@ def _bump(scene, drawn, Ls, Hs, pipe):
       eq 1-4), each * 255, and Q in turns * 256. A light below the surface's horizon is
       taken at T_L = 0: the patent's 8-bit k2 is unsigned (docs/bump.md)."""
     b = scene["bump"]
-    hi, lo, normals = bumps.bump_texels(bumps.KINDS[b["method"]], b["map"], b["size"],
-                                        b["depth"], ANGLE_BITS)
+    try:
+        hi, lo, normals = bumps.bump_texels(bumps.KINDS[b["method"]], b["map"], b["size"],
+                                            b["depth"], ANGLE_BITS)
+    except bumps.BumpError as e:           # its message names bump.map
+        raise SceneError(str(e)) from None
     size = hi.shape[0]
     if hi.shape[0] != hi.shape[1] or size & (size - 1) or size > MAX_TEXTURE:
         raise SceneError(f"bump.map: {b['map']!r} is {hi.shape[1]} x {hi.shape[0]} texels; a "
