@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga formal tradeoffs texcache turntable clean
+.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga formal fuzz tradeoffs texcache turntable clean
 
 setup: $(STAMP)
 
@@ -68,6 +68,15 @@ ONLY    ?=
 TIMEOUT ?=
 formal: setup
 	$(PY) -m sim.formal $(if $(ONLY),--only $(ONLY)) $(if $(TIMEOUT),--timeout $(TIMEOUT))
+
+# Generated inputs (hypothesis): 10,000 scene files, malformed and valid-but-hard, each a clear
+# error naming its key or a picture; 300 valid ones through the RTL against the model; 10,000
+# malformed npz files through sim run, golden run and sim check: build/fuzz/fuzz.{md,json}.
+# make fuzz [N=scenes and npz files] [RTL=renders]
+N       ?= 10000
+RTL     ?= 300
+fuzz: setup
+	$(PY) -W ignore::RuntimeWarning -m sim.fuzz --scenes $(N) --npz $(N) --rtl $(RTL)
 
 # What accuracy costs: every knob's settings measured side by side (image error with FLIP,
 # unit error, latency, Fmax, ns per pixel, area, simulation time), the seeds' claims, Pareto

@@ -310,9 +310,9 @@ def rtl_check(prep):
     return None
 
 
-def fuzz_scenes(n, seed, tmp, rtl=0, log=None, detail=None):
+def fuzz_scenes(n, seed, tmp, rtl=0, log=None, detail=None, configs=None):
     """``n`` generated scenes (a third valid, the rest malformed) and ``rtl`` valid ones of
-    ``RTL_CONFIGS`` through the RTL. Returns ``(counts, failures)``: counts by (class,
+    ``RTL_CONFIGS`` (or of ``configs``, some of them) through the RTL. Returns ``(counts, failures)``: counts by (class,
     outcome); failures: ``[(class, what, text)]``."""
     counts, failures = Counter(), []
     tmp.mkdir(parents=True, exist_ok=True)
@@ -337,7 +337,7 @@ def fuzz_scenes(n, seed, tmp, rtl=0, log=None, detail=None):
                                  st.none()),
                        malformed_scene(tmp), malformed_scene(tmp))
 
-    @settings(max_examples=n, database=None, deadline=None, derandomize=False,
+    @settings(max_examples=max(n, 1), database=None, deadline=None, derandomize=False,
               suppress_health_check=list(HealthCheck))
     @hseed(seed)
     @given(scenes)
@@ -357,7 +357,7 @@ def fuzz_scenes(n, seed, tmp, rtl=0, log=None, detail=None):
         @settings(max_examples=rtl, database=None, deadline=None,
                   suppress_health_check=list(HealthCheck))
         @hseed(seed + 1)
-        @given(st.sampled_from(list(RTL_CONFIGS)).flatmap(
+        @given(st.sampled_from(list(configs or RTL_CONFIGS)).flatmap(
             lambda c: st.tuples(st.just(c), valid_scene(c))))
         def through_rtl(case):
             config, data = case

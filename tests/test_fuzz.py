@@ -1,0 +1,36 @@
+"""The short version of make fuzz: generated scenes (malformed and valid-but-hard) each give a
+clear error naming the key or a picture, never a traceback; valid ones through the RTL on the
+batch path match their model (the pixels covered, each within 1 level); malformed npz inputs
+to sim run, golden run and sim check each exit 2 with one line."""
+import warnings
+
+import pytest
+
+from sim.fuzz import fuzz_npz, fuzz_scenes
+from sim.simulators import available
+
+
+def test_generated_scenes(tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        counts, failures = fuzz_scenes(300, 3, tmp_path)
+    assert not failures, failures[:3]
+    kinds = {k for k, _ in counts}
+    assert {"hard", "syntax", "type", "range", "nonfinite", "unknown", "degenerate",
+            "file", "extreme"} <= kinds, kinds
+    assert counts["hard", "ok"] > 20          # the valid scenes do render, not only fail
+
+
+@pytest.mark.skipif(bool(available("verilator")), reason=f"verilator: {available('verilator')}")
+@pytest.mark.xdist_group("verilator-scene")
+def test_generated_scenes_through_the_rtl(tmp_path):
+    """The xshading configuration only: its 64 x 64 model is the one test_scenes builds."""
+    counts, failures = fuzz_scenes(0, 5, tmp_path, rtl=6, configs=["xshading"])
+    assert not failures, failures[:3]
+    assert counts["rtl", "within bound"] == 6
+
+
+def test_malformed_npz(tmp_path):
+    counts, failures = fuzz_npz(400, 3, tmp_path)
+    assert not failures, failures[:3]
+    assert sum(counts.values()) == 400
