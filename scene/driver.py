@@ -28,6 +28,7 @@ import numpy as np
 
 from golden import angular, bump as bumps, fenney, raster as raster_model, shade
 from golden.bump import rotation
+from hdl.fixed import FieldError, check_arrays
 from hdl.setup_unit.formats import EDGE, VALUE, coord
 from hdl.shade_unit.formats import POWER, RGB
 from hdl.texture_unit import MAX_TEXTURE
@@ -367,9 +368,12 @@ def prepare(scene, hardware=None):
     facing = np.einsum("ij,ij->i", p[:, 0] - eye, np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]))
     near = (zc[tris] <= 0.1).any(1)
     cfmt = coord(screen_bits, sub_bits)
-    lim = 2.0 ** (cfmt.width - 1 - sub_bits)
-    with np.errstate(invalid="ignore"):
-        outside = ~((np.abs(sx[tris] - 0) < lim) & (np.abs(sy[tris]) < lim)).all(1)
+    # beyond the coordinate field once rounded to sub-pixels (127.99 px rounds to 128.0, one
+    # past the field's largest value: make fuzz found it wrapping to -128 in the RTL)
+    with np.errstate(invalid="ignore", over="ignore"):
+        fits = lambda v: (np.rint(v * (1 << sub_bits)) >= cfmt.min) & \
+            (np.rint(v * (1 << sub_bits)) <= cfmt.max)
+        outside = ~(fits(sx[tris]) & fits(sy[tris])).all(1)
     keep = (facing < 0) & ~near & ~outside
     drawn = tris[keep]
     # per-vertex lighting: viewer at infinity
@@ -426,6 +430,11 @@ def prepare(scene, hardware=None):
     texture = [s for s in spec.stages if hasattr(s, "image")]
     image = texture[0].image({"bump": bump}) if texture else None
     onchip = bool(texture) and texture[0].onchip
+    try:                              # every value fits its field, or the RTL would wrap it
+        check_arrays(spec.raster.unit.inputs, inputs, where="prepare")
+    except FieldError as e:
+        raise AssertionError(f"the driver made a triangle its raster cannot take: {e}") \
+            from None
     return {"scene": scene, "params": pipe, "pipeline": spec, "inputs": inputs, "real": real,
             "memory": None if onchip else image,
             "load": host.writes(spec, uni, tables, image if onchip else None),

@@ -34,3 +34,15 @@ def test_malformed_npz(tmp_path):
     counts, failures = fuzz_npz(400, 3, tmp_path)
     assert not failures, failures[:3]
     assert sum(counts.values()) == 400
+
+
+@pytest.mark.skipif(bool(available("verilator")), reason=f"verilator: {available('verilator')}")
+@pytest.mark.xdist_group("verilator-scene")
+def test_vertex_at_the_coordinate_fields_edge():
+    """What make fuzz found: a dense torus whose vertices round to one past the coordinate
+    field; the driver now culls such triangles (prepare checks every field), so the RTL covers
+    exactly the model's pixels."""
+    from scene import driver as S
+    from sim.fuzz import rtl_check
+    prep = S.prepare(S.load("tests/data/fuzz_coordinate_edge.toml"))
+    assert rtl_check(prep) is None
