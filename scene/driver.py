@@ -674,6 +674,23 @@ def bump_model(prep, frag, ch, **bound):
                       **bound)
 
 
+def polar_candidates(prep, frag, ch):
+    """fenney_polar's bound, per fragment: every colour the RTL may give, (choices, n, 3).
+    The texel one either way along s and t (the raster's coordinates are within one LSB of
+    the model's), and each lane's intensity one either way (fenney_polar is within
+    ``golden.fenney.polar_bound``, 0.874, of the float eq 3, which the model rounds); the
+    rest is exact (tests/test_bump_scenes.py)."""
+    lanes = [("d" if t == "l" else "s") + str(k) for t, k in prep["bump"]["lanes"]]
+    out = []
+    for ds in (-1, 0, 1):
+        for dt in (-1, 0, 1):
+            for offs in np.ndindex(*(3,) * len(lanes)):
+                off = {key: o - 1 for key, o in zip(lanes, offs)}
+                c = {**ch, **bump_model(prep, frag, ch, ds=ds, dt=dt, offset=off)}
+                out.append(shade_fragments(prep, c))
+    return np.stack(out)
+
+
 def shade_fragments(prep, ch, frag=None):
     """The stages after the raster and the bump stages (phong, the power, colour) on the
     values ``ch``: rgb (n, 3)."""

