@@ -397,9 +397,17 @@ def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=No
     failed = sorted(set(re.findall(r"Assert failed in formal_top: (\w+)", log)))
     if mode == "cover":
         failed += sorted(set(re.findall(r"[Uu]nreached cover statement[^\n]*?(c_\w+)", log)))
-    return {"target": name, "mutant": mutant, "only": only, "status": status, "failed": failed,
-            "seconds": round(time.monotonic() - t0, 1), "depth": depth, "mode": mode,
-            "log": str(work / "run.log")}
+    out = {"target": name, "mutant": mutant, "only": only, "status": status, "failed": failed,
+           "seconds": round(time.monotonic() - t0, 1), "depth": depth, "mode": mode,
+           "log": str(work / "run.log"), "reached": _reached(log)}
+    (work / "result.json").write_text(json.dumps(out, indent=2) + "\n")
+    return out
+
+
+def _reached(log):
+    """The last step the solver finished (a stopped run's progress)."""
+    steps = re.findall(r"Checking assertions in step (\d+)", log)
+    return int(steps[-1]) if steps else None
 
 
 def default_depth(unit):
@@ -513,7 +521,16 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help=f"only {', '.join(QUICK)}")
     ap.add_argument("--timeout", type=float, default=None,
                     help="seconds a check may take (default: no limit)")
+    ap.add_argument("--report", action="store_true",
+                    help="only the table, from every check's build/formal/*/result.json")
     args = ap.parse_args(argv)
+    if args.report:
+        results = [json.loads(f.read_text()) for f in sorted(OUT.glob("*/result.json"))]
+        results.sort(key=lambda r: list(targets()).index(r["target"]))
+        text = table(results)
+        (OUT / "formal.md").write_text(text)
+        print(text)
+        return
     names = list(targets())
     if args.only:
         names = args.only.split(",")
