@@ -466,7 +466,7 @@ def table(results):
             props += ", memory join"
         bound = drain_bound(u) if multi else u.latency
         res = {"pass": "bounded, all hold", "fail": "FAILS: " + ", ".join(b["failed"])}.get(
-            b["status"], b["status"])
+            b["status"], f"{b['status']}: no failure through step {(b['reached'] or 1) - 1}")
         if multi:
             res += f" (drain bound {bound}: not checked)"
         cov = "-" if not c else ("all reached" if c["status"] == "pass" and not c["failed"]
