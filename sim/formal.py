@@ -21,7 +21,13 @@ clock, and immediate assertions read with ``read_verilog -formal``:
   that neither side of the join waits forever;
 - covers: three outputs, a stall released, the watched output (so no proof is vacuous).
 
-``python -m sim.formal [--only a,b] [--mutants] [--quick]`` writes build/formal/formal.{json,md}.
+Each design gets a BMC of every property to latency + ``SLACK``, a k-induction proof of
+``held``, and its covers; the mutants (``MUTANTS``) run with only the property they break.
+Products are replaced where that is sound (``MUL_STANDIN``, ``sby_text``); docs/formal.md
+says why, and what the solver did not reach.
+
+``python -m sim.formal [--only a,b] [--quick] [--jobs n] [--timeout s]`` writes
+build/formal/formal.{json,md}; ``--report`` rebuilds the table from every check's result.
 """
 import argparse
 import json
