@@ -48,6 +48,7 @@ BOX = 2              # triangles within this many pixels of their first vertex (
 MEM_WAIT = 3         # the memory model answers a request within this many clocks
 SLACK = 20           # BMC depth beyond the longest bound
 COUNT = 10           # bits of the transfer counters (depths stay below 2**COUNT)
+PROVE_DEPTH = 4      # k-induction's depth
 
 # the pipelines: one per method and bump method, at the smallest sizes (the proof is about
 # the streams, which do not depend on the sizes), the texture through its memory port
@@ -136,7 +137,9 @@ def harness(unit, module, mutant=None, only=None, cut=False):
     decl = lambda kind, p, w: f"  (* {kind} *) reg [{w - 1}:0] {p};"
     L += [decl("anyseq", "i_valid", 1), decl("anyseq", "o_ready_env", 1)]
     L += [decl("anyseq", p, w) for p, w in ins] + [decl("anyconst", p, w) for p, w in uni]
-    L += [f"  wire [{w - 1}:0] {p};" for p, w in outs + status]
+    L += [f"  wire [{w - 1}:0] {p};" for p, w in outs]
+    L += [f"  wire [{w - 1}:0] st_{p};" for p, w in status]    # st_: a pipeline's "held" port
+    #                                                            is not the property held
     L += ["  wire i_ready, o_valid, o_ready;"]
     conn = ["clk", "rst", "i_valid", "i_ready", "o_valid", "o_ready"] + \
         [p for p, _ in ins + uni + outs + status]
@@ -146,6 +149,7 @@ def harness(unit, module, mutant=None, only=None, cut=False):
         conn += [f"{name}_valid", f"{name}_ready"] + [p for p, _ in fields]
     # the core's own view of the streams: the mutants sit between it and the harness
     core = {p: p for p in conn}
+    core.update({p: f"st_{p}" for p, _ in status})
     M = []
     if mutant == "unstable":        # the output payload flips a bit after a clock stalled
         first = outs[0][0]
@@ -289,9 +293,9 @@ def _many(unit, ins, outs, status, host, cut=False):
          "  always @* begin",
          "    if (o_valid && !rst) no_extra: assert(o_tri < n_tri);",
          "    if (out_t && any_out) order: assert(here > last);",
-         f"    if (watched && age > {bound}) drain: assert(!busy && !o_valid);",
+         f"    if (watched && age > {bound}) drain: assert(!st_busy && !o_valid);",
          # the watched triangle's fragments come out, with its index: none dropped before it
-         "    if (watched && !busy && !o_valid) order_seen: assert(seen_watch);",
+         "    if (watched && !st_busy && !o_valid) order_seen: assert(seen_watch);",
          # a fragment out while the setup has the next triangle: the two overlap
          "    c_watch: cover(watched && out_t);",
          "  end"]
@@ -310,24 +314,27 @@ def _memory(req, resp, req_fields, resp_fields):
     reps = -(-dw // aw)
     return [
         f"  (* anyseq *) reg {req}_take, {resp}_give;",
-        f"  reg [{aw - 1}:0] mq0, mq1;", "  reg [1:0] mn = 0;", "  reg [3:0] mwait = 0;",
-        f"  assign {req}_ready = {req}_take & (mn != 2);",
-        f"  assign {resp}_valid = (mn != 0) & {resp}_give;",
-        f"  assign {data} = {{{reps}{{mq0}}}} ^ {dw}'h{'5a' * (-(-dw // 8))};".replace(
+        f"  reg [{aw - 1}:0] {req}_mq0, {req}_mq1;", f"  reg [1:0] {req}_mn = 0;",
+        f"  reg [3:0] {req}_mwait = 0;",
+        f"  assign {req}_ready = {req}_take & ({req}_mn != 2);",
+        f"  assign {resp}_valid = ({req}_mn != 0) & {resp}_give;",
+        f"  assign {data} = {{{reps}{{{req}_mq0}}}} ^ {dw}'h{'5a' * (-(-dw // 8))};".replace(
             f"{dw}'h{'5a' * (-(-dw // 8))}", f"{dw}'h{('5a' * 64)[:-(-dw // 4)]}"),
-        f"  wire mreq = ~rst & {req}_valid & {req}_ready;",
-        f"  wire mresp = ~rst & {resp}_valid & {resp}_ready;",
-        "  always @(posedge clk) if (rst) mn <= 0; else begin",
-        f"    mn <= mn + mreq - mresp;",
-        f"    if (mresp) mq0 <= mq1;",
-        f"    if (mreq && (mn == 0 || (mn == 1 && mresp))) mq0 <= {addr};",
-        f"    if (mreq && (mn == 1 && !mresp || mn == 2)) mq1 <= {addr};",
-        f"    if (mreq && mn == 2 && mresp) mq1 <= {addr};",
+        f"  wire {req}_mreq = ~rst & {req}_valid & {req}_ready;",
+        f"  wire {req}_mresp = ~rst & {resp}_valid & {resp}_ready;",
+        f"  always @(posedge clk) if (rst) {req}_mn <= 0; else begin",
+        f"    {req}_mn <= {req}_mn + {req}_mreq - {req}_mresp;",
+        f"    if ({req}_mresp) {req}_mq0 <= {req}_mq1;",
+        f"    if ({req}_mreq && ({req}_mn == 0 || ({req}_mn == 1 && {req}_mresp))) "
+        f"{req}_mq0 <= {addr};",
+        f"    if ({req}_mreq && ({req}_mn == 1 && !{req}_mresp || {req}_mn == 2)) "
+        f"{req}_mq1 <= {addr};",
+        f"    if ({req}_mreq && {req}_mn == 2 && {req}_mresp) {req}_mq1 <= {addr};",
         "  end",
         # bounded waits: a request or a response waits at most MEM_WAIT clocks for the memory
-        f"  always @(posedge clk) mwait <= ((~rst & {req}_valid & ~{req}_ready) | "
-        f"(~rst & mn != 0 & ~{resp}_valid)) ? mwait + 1 : 0;",
-        f"  always @* if (mwait >= {MEM_WAIT}) assume({req}_take && {resp}_give);",
+        f"  always @(posedge clk) {req}_mwait <= ((~rst & {req}_valid & ~{req}_ready) | "
+        f"(~rst & {req}_mn != 0 & ~{resp}_valid)) ? {req}_mwait + 1 : 0;",
+        f"  always @* if ({req}_mwait >= {MEM_WAIT}) assume({req}_take && {resp}_give);",
     ]
 
 
@@ -385,7 +392,9 @@ def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=No
     only = mutant_property(mutant, unit) if mutant else only
     cut = is_multi(unit)              # the raster's products free: see _many and sby_text
     (work / "harness.v").write_text(harness(unit, module, mutant, only, cut))
-    depth = depth or default_depth(unit)
+    # k-induction needs no deep base case: held is 2-inductive (the raster's too), and sby
+    # proves it once both the induction and the base case reach k
+    depth = depth or (PROVE_DEPTH if mode == "prove" else default_depth(unit))
     (work / "job.sby").write_text(sby_text(module, depth, mode, cut))
     (work / "mul_standin.v").write_text(MUL_STANDIN)
     t0 = time.monotonic()
@@ -461,8 +470,10 @@ def table(results):
     for name, runs in by.items():
         b, c = runs.get(("bmc", None)), runs.get(("cover", None))
         p = runs.get(("prove", None))
-        if not b:
+        if not (b or p or c):
             continue
+        b = b or {"status": "not run", "failed": [], "seconds": 0, "depth": "-",
+                  "reached": None}
         unit, params = targets()[name]
         u = make_unit(unit, spec=True, **params)
         multi = "tri" in {f.name for f in u.outputs}
@@ -471,13 +482,15 @@ def table(results):
         if u.stream_ports:
             props += ", memory join"
         bound = drain_bound(u) if multi else u.latency
-        res = {"pass": "bounded, all hold", "fail": "FAILS: " + ", ".join(b["failed"])}.get(
+        res = {"pass": "bounded, all hold", "fail": "FAILS: " + ", ".join(b["failed"]),
+               "not run": "not run"}.get(
             b["status"], f"{b['status']}: no failure through step {(b['reached'] or 1) - 1}")
         if multi:
             res += f" (drain bound {bound}: not checked)"
         cov = "-" if not c else ("all reached" if c["status"] == "pass" and not c["failed"]
                                  else f"{c['status']} {', '.join(c['failed'])}")
-        prove = "-" if not p else {"pass": "proven", "fail": "induction fails"}.get(
+        prove = "-" if not p else {"pass": f"proven (k <= {p['depth']})",
+                                   "fail": "induction fails"}.get(
             p["status"], p["status"])
         rows.append(f"| {name} | {props} | {b['depth']} | {res} | {b['seconds']:.0f} | "
                     f"{prove} | {p['seconds'] if p else 0:.0f} | {cov} | "
