@@ -338,7 +338,10 @@ def _memory(req, resp, req_fields, resp_fields):
     ]
 
 
-# A one-row unit's products replaced by a cheap function of the same operands (a + 2 b): its
+# A one-row unit's products of two data values replaced by a cheap function of the same
+# operands (a + 2 b); products by a constant are kept (an address's scale: illum's cosine
+# addresses are fold * 1, and a + 2 b read words past the 257-entry tables, uninitialised
+# and so free in each copy, which made illum "fail" order). Its
 # pipeline's enables read only valid and ready (hdl.unit.Pipeline), never data, so where
 # items go does not depend on what a product is, and a deterministic stand-in keeps the
 # order property's comparison with the copy; proving a b = a b across two copies of a
@@ -346,8 +349,11 @@ def _memory(req, resp, req_fields, resp_fields):
 # 14 minutes). The raster's control does read its products: there they are free (cutpoint).
 MUL_STANDIN = """(* techmap_celltype = "$mul" *)
 module mul_standin #(parameter A_SIGNED = 0, B_SIGNED = 0, A_WIDTH = 1, B_WIDTH = 1,
-                     Y_WIDTH = 1) (input [A_WIDTH-1:0] A, input [B_WIDTH-1:0] B,
-                                   output [Y_WIDTH-1:0] Y);
+                     Y_WIDTH = 1, _TECHMAP_CONSTMSK_A_ = 0, _TECHMAP_CONSTMSK_B_ = 0)
+                    (input [A_WIDTH-1:0] A, input [B_WIDTH-1:0] B, output [Y_WIDTH-1:0] Y);
+  // a product by a constant (an address's scale) stays a product: it is linear, cheap for
+  // the solver, and the stand-in would move a table's address past its last entry
+  wire _TECHMAP_FAIL_ = &_TECHMAP_CONSTMSK_A_ || &_TECHMAP_CONSTMSK_B_;
   wire [Y_WIDTH-1:0] a, b;
   generate
     if (A_SIGNED) assign a = $signed(A); else assign a = A;

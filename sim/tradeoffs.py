@@ -103,6 +103,17 @@ def configurations(quick=False, knobs=None):
         rows.append(_row("reciprocal", "divider" if recip == "divide" else f"NR {iters}",
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
                          default=(recip, iters) == ("newton", 2)))
+    # the raster's multipliers: the setup's (clocks per triangle), the row engine's (its
+    # row interval: 0 is one per channel and one more)
+    for n in (1, 2, 3):
+        hw = {"setup_mults": n}
+        rows.append(_row("setup multipliers", str(n), raster(**hw), scene="default",
+                         hardware=hw, unit=unit_raster(**hw), default=n == 1))
+    for n in (0, 2, 3):
+        hw = {"row_mults": n}
+        rows.append(_row("row multipliers", "one per channel + 1" if n == 0 else str(n),
+                         raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
+                         default=n == 0))
     # the rotation: method (the exact one's CORDIC iterations), angle bits, table address bits
     for label, p, scene in (("paper", {}, "bump_angular"),
                             ("exact", {"method": "exact"}, "bump_angular_exact"),

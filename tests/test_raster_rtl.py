@@ -97,6 +97,30 @@ def test_modes_and_reciprocals_on_amaranth(params):
     check(inputs, out, p)
 
 
+def test_multiplier_knobs_keep_the_contract():
+    """Three setup multipliers and two row-engine multipliers for three channels (the row
+    engine's 23 products every ceil(23 / 2) = 12 clocks, not 6): the same fragments within
+    the same bound, under backpressure, with the latency its schedules state; the setup's
+    clocks fall (its critical path, not its products, then sets them: docs/quadratic.md)."""
+    params = {**SMALL, "channels": 3, "modes": "exact,xshading,linear", "setup_mults": 3,
+              "row_mults": 2}
+    unit = make_unit("raster", spec=True, **params)
+    base = make_unit("raster", spec=True, **{k: v for k, v in params.items()
+                                             if not k.endswith("_mults")})
+    assert unit.timing[1] == 12 and base.timing[1] == 6
+    assert unit.timing[0] < base.timing[0]
+    p = unit.params
+    hard, _ = raster_hard_cases(**p)
+    extra = random_triangles(np.random.default_rng(9), 12, **p)
+    inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
+    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=0.7, seed=4)
+    check(inputs, out, p)
+    k = raster_hard_cases(**p)[1].index("whole screen")
+    one = {f: hard[f][k:k + 1] for f in hard}
+    _, info = stream("raster", one, "amaranth", params)
+    assert info["latency"] == unit.latency
+
+
 @pytest.mark.parametrize("simulator,name", list(per_simulator(["raster"], only=("verilator",))))
 def test_edge_constant_groups(simulator, name):
     """Channels in two groups, each with its own per-edge constants (a vector's components

@@ -32,16 +32,19 @@ class Raster(Unit):
     DOC = ("Triangle setup (X-shading / exact mid-edge / linear, one reciprocal) and the "
            "forward-difference span engine; many fragments per triangle")
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
-              "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0}
+              "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0,
+              "setup_mults": 1, "row_mults": 0}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "groups": None,     # a string: parse_groups checks it
-              "flat": (0, 8)}
+              "flat": (0, 8),
+              "setup_mults": (1, 6),     # the setup's multipliers (35 x 35, four MULT18X18D each)
+              "row_mults": (0, 13)}      # the row engine's; 0: one per channel and one more
     PER_CHANNEL = ("modes", "groups")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups,
-                 flat):
+                 flat, setup_mults, row_mults):
         parse_modes(modes, channels)
         self.groups = max(parse_groups(groups, channels)) + 1
 
@@ -87,7 +90,8 @@ class Raster(Unit):
         count = Signal(32)
         with m.If(self.i.valid & self.i.ready):
             m.d.sync += count.eq(count + 1)
-        sc = Schedule(m, "su", Const(1), mux_groups=8, platform=platform)
+        sc = Schedule(m, "su", Const(1), mults=self.params["setup_mults"], mux_groups=8,
+                      platform=platform)
         # ready from registers only: the next triangle starts a clock after the walker takes
         # this one. The inputs are captured while the setup is idle (its ready), from copies
         # of ready, each a state machine of its own (Schedule.aligned_copy says why)
@@ -116,7 +120,8 @@ class Raster(Unit):
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
         rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat)
-        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform, flat)
+        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform, flat,
+                                        self.params["row_mults"] or ch + 1)
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o, flat)
         busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | running[0]

@@ -146,14 +146,14 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, fla
     return {**buf, **held}, have
 
 
-def row_engine(m, w, channels, rows, row_link, space, platform=None, flat=()):
+def row_engine(m, w, channels, rows, row_link, space, platform=None, flat=(), mults=None):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
     d = P0 + Pu u + Pv v. The engine never stalls: a row starts only when ``space`` (a
     register of the row queue) promises a place for it. Returns the row values for the
     stepper, the schedule and the output's valid bit."""
-    mults = channels + 1
+    mults = mults or channels + 1
     ii = -(-(2 + 7 * channels) // mults)
     out_valid = Signal(name="re_out_valid")
     sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
