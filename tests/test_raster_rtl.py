@@ -202,6 +202,8 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
     ({"screen_bits": 11}, "screen_bits must be in 4..10"),      # docs/quadratic.md: widths
     ({"channels": 3, "groups": "0,2,2"}, "groups must be numbered 0, 1, ... without gaps"),
     ({"groups": "0,0,1"}, "groups names 3 channel(s) but channels=2"),
+    ({"row_mults": 4}, "row_mults must be at most channels"),       # then: + 1 = 3
+    ({"setup_mults": 0}, "setup_mults must be in 1..6"),
 ])
 def test_bad_parameters_are_named(params, message):
     with pytest.raises(ParamError, match=message.replace("(", r"\(").replace(")", r"\)")):

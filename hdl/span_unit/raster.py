@@ -47,6 +47,9 @@ class Raster(Unit):
                  flat, setup_mults, row_mults):
         parse_modes(modes, channels)
         self.groups = max(parse_groups(groups, channels)) + 1
+        if row_mults > channels + 1:          # sharing only: ii stays at or above the default's
+            raise ValueError(f"row_mults must be at most channels + 1 = {channels + 1} (0: "
+                             f"that many), not {row_mults}")
 
     @property
     def setup(self):
