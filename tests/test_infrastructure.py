@@ -160,13 +160,15 @@ def test_verilog_exports_lint_clean(name, tmp_path):
 
 def test_param_ranges_are_enforced_and_described():
     """The ranges ``sim units --json`` shows are the ones the constructors enforce (the
-    rotation's asin table needs asin_bits <= trig_bits + 1: set the other one to allow it)."""
+    rotation's asin table needs asin_bits <= trig_bits + 1, the raster's row_mults at most
+    channels + 1: set the other one to allow it)."""
+    needs = {"trig_bits": {"asin_bits": 4}, "asin_bits": {"trig_bits": 16},
+             "row_mults": {"channels": 12}}
     for name, cls in UNITS.items():
         ranges = describe(name)["param_ranges"]
         assert set(ranges) == set(cls.PARAMS)
         for key, r in ranges.items():
-            other = {"trig_bits": {"asin_bits": 4}, "asin_bits": {"trig_bits": 16}}.get(key, {}) \
-                if "asin_bits" in cls.PARAMS else {}
+            other = {k: v for k, v in needs.get(key, {}).items() if k in cls.PARAMS}
             if "min" in r:
                 make_unit(name, spec=True, **other, **{key: r["min"]})
                 make_unit(name, spec=True, **other, **{key: r["max"]})
