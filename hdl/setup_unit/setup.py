@@ -320,11 +320,15 @@ class Setup:
         exact = {g for g, m in zip(self.groups, self.modes) if m == "exact"}
         for e in (f"{e}{edge_names(g)[0][3:]}" for g in sorted(exact)
                   for e in ("e12", "e13", "e23")):
-            x = (v[e] + (1 << 15)).as_unsigned()[:17]                 # 1 + e, 15 fraction bits
-            sh = Const(0, 5)                                           # even, top bit at 17/18
+            # 1 + e (15 fraction bits), its normalising shift (even, top bit at 17/18), the
+            # shift: each in its own clock
+            x = sc.let(f"{e}_1e", (v[e] + (1 << 15)).as_unsigned()[:17])
+            sh = Const(0, 5)
             for k in range(17):
                 sh = Mux(x[k], (18 - k) & ~1, sh)
-            pre = sc.lets(**{f"{e}_x": (x << sh)[:Wm], f"{e}_sh": sh, f"{e}_z": ~x.any()})
+            sh = sc.lets(**{f"{e}_nsh": sh, f"{e}_z": ~x.any()})
+            pre = {**sh, **sc.lets(**{f"{e}_x": (x << sh[f"{e}_nsh"])[:Wm]})}
+            pre[f"{e}_sh"] = pre[f"{e}_nsh"]
             m = pre[f"{e}_x"]
             k = 7
             addr = Cat(Mux(m[Wm - 1], m[Wm - 1 - k:Wm - 1], m[Wm - 2 - k:Wm - 2]), m[Wm - 1])
@@ -334,7 +338,7 @@ class Setup:
                 my = sc.mul(f"{e}_my{it}", y2, m, post=lambda p: p >> (Wm - 2))
                 t = sc.let(f"{e}_t{it}", (Const(3 << FG, signed(FG + 4)) - my)[:FG + 2])
                 y = sc.mul(f"{e}_y{it}", y, t, post=lambda p: (p >> (FG + 1))[:FG + 1])
-            gg = (y << (pre[f"{e}_sh"] >> 1)) >> 5                    # y 2**(sh/2 - 2), FG-3
+            gg = sc.let(f"{e}_gg", (y << (pre[f"{e}_sh"] >> 1)) >> 5)  # y 2**(sh/2-2), FG-3
             g[f"g{e[1:]}"] = sc.let(f"g{e[1:]}", Mux(pre[f"{e}_z"] | (gg > gmax), gmax,
                                                      gg)[:OPERAND - 1])
         return g
@@ -360,16 +364,22 @@ class Setup:
         lo, hi = VALUE.min << up, VALUE.max << up                       # exact: eq 4-6, 16
         shift = VALUE.frac_bits + G_FRAC - 3 - w.FC
 
-        def mid(name, s, gk):
-            m = sc.mul(f"{n}_{name}", sums[f"{n}_{s}"], g[gk],
+        # the mid-edge values' products, their saturation's compares, its multiplexer, then
+        # a, b, c, then d, e: each in its own clock (a product's compares, multiplexer and
+        # three sums in one clock closed at 67 MHz)
+        mids = {}
+        for k in ("12", "13", "23"):
+            m = sc.mul(f"{n}_m{k}", sums[f"{n}_s{k}"], g[f"g{k}{sfx}"],
                        post=lambda p: (p + (1 << (shift - 1))) >> shift)
-            return _saturate(m, lo, hi)
-        I12, I13, I23 = mid("m12", "s12", f"g12{sfx}"), mid("m13", "s13", f"g13{sfx}"), \
-            mid("m23", "s23", f"g23{sfx}")
+            cmp = sc.lets(**{f"{n}_hi{k}": m > hi, f"{n}_lo{k}": m < lo})
+            mids[f"{n}_I{k}"] = sc.let(f"{n}_I{k}", Mux(cmp[f"{n}_hi{k}"], hi,
+                                                        Mux(cmp[f"{n}_lo{k}"], lo, m)))
+        I12, I13, I23 = (mids[f"{n}_I{k}"] for k in ("12", "13", "23"))
         L, M, N = I1 << up, I2 << up, I3 << up
-        a, b = 2 * (L + M - 2 * I12), 2 * (L + N - 2 * I13)
-        return {"a": a, "b": b, "c": 4 * (L + I23 - I13 - I12), "d": M - L - a, "e": N - L - b,
-                "f": L}
+        abc = sc.lets(**{f"{n}_xa": 2 * (L + M - 2 * I12), f"{n}_xb": 2 * (L + N - 2 * I13),
+                         f"{n}_xc": 4 * (L + I23 - I13 - I12)})
+        a, b, c = (abc[f"{n}_x{k}"] for k in "abc")
+        return {"a": a, "b": b, "c": c, "d": M - L - a, "e": N - L - b, "f": L}
 
     def _span(self, sc, coef, alpha, ch, linear):
         """The row engine's constants of one channel: a..f as operands, and the first
