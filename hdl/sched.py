@@ -6,7 +6,8 @@ Each operation is placed, in program order, at the first offset where its operan
 start pulse, so several jobs may be in flight. With ``ii``, jobs start only on every ``ii``-th
 clock (``aligned``, a free-running count), the multipliers are reserved modulo ``ii``, and a
 register read more than ``ii`` offsets after it was written is read from a copy (``late``),
-so the next job never overwrites a value before its last read (:meth:`Schedule.check`).
+so the next job never overwrites a value before its last read (:meth:`Schedule.check`);
+a division takes ``ceil((q_bits + 1) / ii)`` dividers in turn.
 Everything advances with one enable, so a stalled schedule holds every value.
 
 A product: operands are registered (the DSP's input registers), the four 18 x 18 partial
@@ -18,6 +19,7 @@ clock later.
 from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
 from amaranth.hdl._ast import Concat, Operator, SignalDict, SignalSet, Slice  # Signals
 # are not hashable; the node types tell an operand's wiring from its logic
+from amaranth.hdl._xfrm import ValueTransformer     # late copies put into an expression
 from amaranth.lib.memory import Memory
 
 from .dsp import mult18
@@ -118,6 +120,7 @@ class Schedule:
     def let(self, name, value, shape=None, after=0):
         """A register of ``value``, written as soon as its operands are ready."""
         k = self._when(value, after=after)
+        value = self._late_at(value, k)
         self._read(k, value)
         return self._write(name, value, k, shape)
 
@@ -129,6 +132,7 @@ class Schedule:
     def lets(self, after=0, **values):
         """Several registers written at one offset (the latest operand's)."""
         k = self._when(*values.values(), after=after)
+        values = {n: self._late_at(v, k) for n, v in values.items()}
         self._read(k, *values.values())
         return {n: self._write(n, v, k) for n, v in values.items()}
 
@@ -161,7 +165,7 @@ class Schedule:
                 continue
             break
         if self.ii is not None:
-            a, b = (self.late(x, k) if isinstance(x, Signal) else x for x in (a, b))
+            a, b = self._late_at(a, k), self._late_at(b, k)
             unit[-1] = (k, a, b)
         self._read(k, a, b)
         total, lat = self._total(idx), self.lat
@@ -203,6 +207,7 @@ class Schedule:
         """``lut[addr]``: a synchronous read, then its own register (the RAM's clock to output
         is never in series with logic)."""
         k = self._when(addr)
+        addr = self._late_at(addr, k)
         self._read(k, addr)
         mem = Memory(shape=unsigned(lut.fmt.width), depth=len(lut.contents),
                      init=[int(v) & ((1 << lut.fmt.width) - 1) for v in lut.contents])
@@ -215,29 +220,66 @@ class Schedule:
 
     def divide(self, name, num, den, q_bits):
         """Unsigned restoring division, one quotient bit per clock: ``(q, r)`` registers with
-        ``num = q den + r``, ``0 <= r < den``, for ``num < den 2**q_bits`` (the caller's)."""
+        ``num = q den + r``, ``0 <= r < den``, for ``num < den 2**q_bits`` (the caller's).
+        With ``ii``: ``ceil((q_bits + 1) / ii)`` dividers, each job taking the next in turn,
+        each with its own copy of ``den``; with more than one, the finished divider's result
+        is copied to a register of its own."""
         k = self._when(num, den)
-        self._read(k + q_bits, den)
-        num, den = Value.cast(num), Value.cast(den)
-        rem = Signal(len(den) + 1, name=f"{self.name}_{name}_rem", reset_less=True)
-        low = Signal(q_bits, name=f"{self.name}_{name}_low", reset_less=True)
-        q = Signal(q_bits, name=f"{self.name}_{name}_q", reset_less=True)
-        run = Signal(name=f"{self.name}_{name}_run")   # offsets k+1 .. k+q_bits, a register
+        n = f"{self.name}_{name}"
+        if self.ii is None:
+            self._read(k + q_bits, den)
+            q, rem = self._divider(n, num, den, self.at(k), self.at(k + q_bits), q_bits)
+            done = k + q_bits
+            self.ready[q] = self.ready[rem] = done + 1
+            self.written[q] = self.written[rem] = done
+            self.length = max(self.length, done + 1)
+            return q, rem[:len(den)]
+        num, den = self._late_at(num, k), self._late_at(den, k)
+        self._read(k, num, den)
+        copies = -(-(q_bits + 1) // self.ii)
+        if copies == 1:                 # valid until the next job loads it, ii clocks on
+            q, rem = self._divider(n, num, den, self.at(k), self.at(k + q_bits), q_bits, True)
+            self.ready[q] = self.ready[rem] = k + q_bits + 1
+            self.written[q] = self.written[rem] = k
+            self.length = max(self.length, k + q_bits + 1)
+            return q, rem[:len(den)]
+        # one-hot turns: the divider the next job loads, the one that finishes next
+        turn = [Signal(name=f"{n}_turn{c}", init=c == 0) for c in range(copies)]
+        fin = [Signal(name=f"{n}_fin{c}", init=c == 0) for c in range(copies)]
+        for ring, at in ((turn, self.at(k)), (fin, self.at(k + q_bits + 1))):
+            with self.m.If(self.en & at):
+                self.m.d.sync += [ring[c].eq(ring[c - 1]) for c in range(copies)]
+        outs = [self._divider(f"{n}{c}", num, den, self.at(k) & turn[c],
+                              self.at(k + q_bits) & fin[c], q_bits, True)
+                for c in range(copies)]
+        done = k + q_bits + 1
+        q, rem = (self._write(f"{name}_{x}", _or_tree([Mux(fin[c], o[j], 0)
+                                                        for c, o in enumerate(outs)]), done)
+                  for j, x in enumerate(("qo", "ro")))
+        return q, rem[:len(den)]
+
+    def _divider(self, n, num, den, load, stop, q_bits, own_den=False):
+        """One divider: loaded at ``load``, a quotient bit a clock until ``stop``."""
+        rem = Signal(len(den) + 1, name=f"{n}_rem", reset_less=True)
+        low = Signal(q_bits, name=f"{n}_low", reset_less=True)
+        q = Signal(q_bits, name=f"{n}_q", reset_less=True)
+        run = Signal(name=f"{n}_run")      # offsets k+1 .. k+q_bits, a register
+        if own_den:
+            held = Signal.like(den, name=f"{n}_den", reset_less=True)
+            with self.m.If(self.en & load):
+                self.m.d.sync += held.eq(den)
+            den = held
         with self.m.If(self.en):
-            self.m.d.sync += run.eq(self.at(k) | (run & ~self.at(k + q_bits)))
+            self.m.d.sync += run.eq(load | (run & ~stop))
         with self.m.If(self.en):
-            with self.m.If(self.at(k)):
+            with self.m.If(load):
                 self.m.d.sync += [rem.eq(num >> q_bits), low.eq(num[:q_bits]), q.eq(0)]
             with self.m.Elif(run):
                 trial = Cat(low[-1], rem)                    # 2 rem + the next bit
                 ok = trial >= den
                 self.m.d.sync += [rem.eq(Mux(ok, trial - den, trial)), low.eq(low << 1),
                                   q.eq(Cat(ok, q))]
-        done = k + q_bits
-        self.ready[q] = self.ready[rem] = done + 1
-        self.written[q] = self.written[rem] = done
-        self.length = max(self.length, done + 1)
-        return q, rem[:len(den)]
+        return q, rem
 
     def late(self, reg, k):
         """``reg``, or a copy of it that is still valid at offset ``k`` (with ``ii``)."""
@@ -252,6 +294,12 @@ class Schedule:
             self._read(c, src)
             copies[c] = self._write(f"{reg.name[len(self.name) + 1:]}_at{c}", src, c)
         return copies[c]
+
+    def _late_at(self, value, k):
+        """``value`` with each register replaced by its copy still valid at offset ``k``."""
+        if self.ii is None:
+            return value
+        return _Late(self, k)(Value.cast(value))
 
     @property
     def aligned(self):
@@ -337,6 +385,14 @@ class Schedule:
             r = self.reads.get(reg, w)
             if r > w + self.ii and reg not in self.outputs:
                 raise AssertionError(f"{reg.name}: written at {w}, read at {r}, ii {self.ii}")
+
+
+class _Late(ValueTransformer):
+    def __init__(self, sc, k):
+        self.sc, self.k = sc, k
+
+    def on_Signal(self, value):
+        return self.sc.late(value, self.k)
 
 
 def _wiring(value):

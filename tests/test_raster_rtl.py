@@ -121,6 +121,37 @@ def test_multiplier_knobs_keep_the_contract():
     assert info["latency"] == unit.latency
 
 
+def test_overlapped_setup_keeps_the_contract():
+    """The setup overlapping triangles, one every 12 clocks on six multipliers: its edge
+    divisions (14 quotient bits at 64 x 64) take two dividers in turn, its results a queue
+    with credits. The same fragments within the same bound under backpressure, the culled
+    count, and the latency its schedule states; back to back, small triangles come through
+    at the interval (a cycle count, not a timing test)."""
+    params = {**SMALL, "channels": 3, "modes": "exact,xshading,linear", "setup_ii": 12,
+              "setup_mults": 6}
+    unit = make_unit("raster", spec=True, **params)
+    assert unit.timing[0] == 12
+    p = unit.params
+    hard, labels = raster_hard_cases(**p)
+    extra = random_triangles(np.random.default_rng(9), 12, **p)
+    inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
+    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=0.7, seed=4)
+    check(inputs, out, p)
+    assert info["culled"] == raster.culled(inputs)
+    k = labels.index("whole screen")
+    one = {f: hard[f][k:k + 1] for f in hard}
+    _, info = stream("raster", one, "amaranth", params)
+    assert info["latency"] == unit.latency
+    # 40 triangles that cover no pixel (between two rows' centres: no row, no span): each
+    # costs the setup its interval and the walker a clock, so 40 take latency + 40 x 12
+    tiny = random_triangles(np.random.default_rng(2), 40, **p, size=1)
+    for c in ("y0", "y1", "y2"):
+        tiny[c][:] = 2 * (1 << p["sub_bits"]) + np.arange(3)[("y0", "y1", "y2").index(c)]
+    out, info = stream("raster", tiny, "amaranth", params)
+    check(tiny, out, p)
+    assert info["cycles"] <= unit.latency + 40 * 12 + 2, (info["cycles"], unit.latency)
+
+
 @pytest.mark.parametrize("simulator,name", list(per_simulator(["raster"], only=("verilator",))))
 def test_edge_constant_groups(simulator, name):
     """Channels in two groups, each with its own per-edge constants (a vector's components
@@ -204,6 +235,11 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
     ({"groups": "0,0,1"}, "groups names 3 channel(s) but channels=2"),
     ({"row_mults": 4}, "row_mults must be at most channels"),       # then: + 1 = 3
     ({"setup_mults": 0}, "setup_mults must be in 1..6"),
+    # 52 products: Omega 2, the edges' numerators 6, two Newton steps 4, the numerator
+    # tracks 16, alpha 2, and 11 for each X-shading channel (a, b, c 3; Pu, Pv, P0, 2A 8)
+    ({"setup_ii": 8}, "setup_ii=8 is too short: the setup's 52 products on setup_mults=1 "
+                      "multiplier(s) take at least 52 clocks; at this interval they need "
+                      "setup_mults=7, more than the 6 allowed"),
 ])
 def test_bad_parameters_are_named(params, message):
     with pytest.raises(ParamError, match=message.replace("(", r"\(").replace(")", r"\)")):

@@ -6,9 +6,12 @@ row's index. A flat word is a triangle's constant (fenney_polar's k1, k2, k3 and
 travels with its triangle through the setup, the walker, the row engine and the row queue to
 each of its fragments, unchanged: a triangle that covers no pixel takes its words with it, so
 nothing beside the raster has to meet fragments with their triangles again. The setup is a
-schedule on one shared multiplier (``Setup.program``, ``setup_clocks`` per triangle); it works
-on the next triangle while the walker and the row engine (``channels + 1`` multipliers, a row
-every ``row_ii`` clocks) and the stepper (one fragment per clock) work on the current one.
+schedule on shared multipliers (``Setup.program``, ``setup_mults`` of them); it works on the
+next triangle while the walker and the row engine (``channels + 1`` multipliers, a row every
+``row_ii`` clocks) and the stepper (one fragment per clock) work on the current one. By
+default the setup takes one triangle at a time (its schedule's length per triangle); with
+``setup_ii`` it overlaps triangles, starting one every ``setup_ii`` clocks, its results going
+through a queue with credits (``span.setup_queue``) to the walker.
 Status outputs: ``busy`` (work in flight) and ``culled`` (degenerate triangles, Omega = 0,
 dropped).
 """
@@ -22,7 +25,7 @@ from ..setup_unit.formats import (MODES, flat_fields, fragment_fields, parse_gro
                                    parse_modes, triangle_fields)
 from ..setup_unit.setup import Setup
 from ..unit import Unit
-from .span import Link, row_engine, row_queue, stepper, walker
+from .span import Link, row_engine, row_queue, setup_queue, stepper, walker
 
 __all__ = ["Raster"]
 
@@ -33,23 +36,33 @@ class Raster(Unit):
            "forward-difference span engine; many fragments per triangle")
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
               "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0,
-              "setup_mults": 1, "row_mults": 0}
+              "setup_mults": 1, "row_mults": 0, "setup_ii": 0}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "groups": None,     # a string: parse_groups checks it
               "flat": (0, 8),
               "setup_mults": (1, 6),     # the setup's multipliers (35 x 35, four MULT18X18D each)
-              "row_mults": (0, 13)}      # the row engine's; 0: one per channel and one more
+              "row_mults": (0, 13),      # the row engine's; 0: one per channel and one more
+              "setup_ii": (0, 255)}      # clocks between triangles in the setup; 0: one at a time
     PER_CHANNEL = ("modes", "groups")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups,
-                 flat, setup_mults, row_mults):
+                 flat, setup_mults, row_mults, setup_ii):
         parse_modes(modes, channels)
         self.groups = max(parse_groups(groups, channels)) + 1
         if row_mults > channels + 1:          # sharing only: ii stays at or above the default's
             raise ValueError(f"row_mults must be at most channels + 1 = {channels + 1} (0: "
                              f"that many), not {row_mults}")
+        if setup_ii:
+            n = _products(screen_bits, sub_bits, channels, modes, recip, recip_iters, groups)
+            if setup_ii * setup_mults < n:
+                need, top = -(-n // setup_ii), self.RANGES["setup_mults"][1]
+                raise ValueError(f"setup_ii={setup_ii} is too short: the setup's {n} products "
+                                 f"on setup_mults={setup_mults} multiplier(s) take at least "
+                                 f"{-(-n // setup_mults)} clocks; at this interval they need "
+                                 f"setup_mults={need}"
+                                 + (f", more than the {top} allowed" if need > top else ""))
 
     @property
     def setup(self):
@@ -74,17 +87,18 @@ class Raster(Unit):
 
     @property
     def timing(self):
-        """``(setup_clocks, row_ii, row_clocks)``: the setup's clocks per triangle, the row
-        engine's clocks per row and its latency (from the schedules themselves)."""
-        return _timing(tuple(sorted(self.params.items())))
+        """``(setup_clocks, row_ii, row_clocks)``: the setup's clocks per triangle (its
+        length, or ``setup_ii``), the row engine's clocks per row and its latency (from the
+        schedules themselves)."""
+        return _timing(tuple(sorted(self.params.items())))[:3]
 
     @property
     def latency(self):
-        """From a triangle in to its first fragment out, when nothing waits: the setup, the
-        walker's load and its row buffer, the row engine, the row queue, the stepper's load,
-        the output register."""
-        setup_clocks, _, row_clocks = self.timing
-        return setup_clocks + 2 + row_clocks + 3
+        """From a triangle in to its first fragment out, when nothing waits: the setup (to
+        its results' last register, or last queue write), the walker's load and its row
+        buffer, the row engine, the row queue, the stepper's load, the output register."""
+        _, _, row_clocks, setup_end = _timing(tuple(sorted(self.params.items())))
+        return setup_end + 1 + 2 + row_clocks + 3
 
     def elaborate(self, platform):
         m = Module()
@@ -93,8 +107,45 @@ class Raster(Unit):
         count = Signal(32)
         with m.If(self.i.valid & self.i.ready):
             m.d.sync += count.eq(count + 1)
-        sc = Schedule(m, "su", Const(1), mults=self.params["setup_mults"], mux_groups=8,
+        ii = self.params["setup_ii"] or None
+        sc = Schedule(m, "su", Const(1), ii=ii, mults=self.params["setup_mults"], mux_groups=8,
                       platform=platform)
+        flat = [f.name for f in self.flat_fields]
+        src_ready = Signal()
+        inputs = {**{f.name: self.i.payload[f.name] for f in self.inputs}, "tri": count}
+        if ii:
+            # overlapped: a triangle every ii clocks while the queue promises a slot; ready,
+            # the start and the input captures from registers (copies of ``aligned``)
+            space = Signal(name="sq_space", init=1)
+            m.d.comb += [sc.start.eq(self.i.valid & sc.aligned & space),
+                         self.i.ready.eq(sc.aligned & space)]
+            v = sc.inputs(inputs, copy=sc.aligned_copy)
+            coef = setup.program(sc, v)
+            coef.update({k: v[k] for k in flat})
+            sq_take = Signal()
+            coef, sq_valid, done_n, held, end = setup_queue(m, sc, coef, space, sq_take)
+            sc.finish()
+            sc.check()
+            m.d.comb += sq_take.eq(src_ready & sq_valid)
+            pending = held.any()
+        else:
+            coef, done_n, pending, end = self._one_at_a_time(m, sc, inputs, src_ready, flat)
+        rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
+        culled = Signal(32)
+        rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat)
+        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform, flat,
+                                        self.params["row_mults"] or ch + 1)
+        rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
+        cur = stepper(m, w, ch, rows, queued, take, self.o, flat)
+        busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | pending
+                | re.busy())
+        m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
+        self._timing = (ii or sc.length, re.ii, re.length, end)
+        return m
+
+    def _one_at_a_time(self, m, sc, inputs, src_ready, flat):
+        """The setup taking a triangle while idle; its results held in the schedule's
+        registers until the walker takes them. Returns ``(values, valid_next, busy, end)``."""
         # ready from registers only: the next triangle starts a clock after the walker takes
         # this one. The inputs are captured while the setup is idle (its ready), from copies
         # of ready, each a state machine of its own (Schedule.aligned_copy says why)
@@ -105,14 +156,12 @@ class Raster(Unit):
             return idle[-1]
         ready = idle_copy()
         m.d.comb += [sc.start.eq(self.i.valid & ready), self.i.ready.eq(ready)]
-        v = sc.inputs({**{f.name: self.i.payload[f.name] for f in self.inputs}, "tri": count},
-                      copy=idle_copy)
-        coef = setup.program(sc, v)
-        flat = [f.name for f in self.flat_fields]
+        v = sc.inputs(inputs, copy=idle_copy)
+        coef = self.setup.program(sc, v)
         coef.update({k: v[k] for k in flat})          # held as tri is, in the input registers
         sc.finish()
         last = sc.at(sc.length - 1)
-        done, src_ready = Signal(), Signal()
+        done = Signal()
         done_n = last | (done & ~src_ready)
         m.d.sync += done.eq(done_n)
         running = []
@@ -120,18 +169,21 @@ class Raster(Unit):
             running.append(Signal(name=f"su_running{k}"))
             run_n = (self.i.valid & r) | (running[k] & ~last)
             m.d.sync += [running[k].eq(run_n), r.eq(~run_n & ~done_n)]
-        rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
-        culled = Signal(32)
-        rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat)
-        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform, flat,
-                                        self.params["row_mults"] or ch + 1)
-        rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
-        cur = stepper(m, w, ch, rows, queued, take, self.o, flat)
-        busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | running[0]
-                | done | re.busy())
-        m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
-        self._timing = (sc.length, re.ii, re.length)
-        return m
+        return coef, done_n, running[0] | done, sc.length - 1
+
+
+@functools.lru_cache(maxsize=None)
+def _products(*params):
+    """The setup's products per triangle (its program on a schedule of its own)."""
+    from amaranth.hdl import Module
+    setup = Setup(*params)
+    m, w = Module(), setup.w
+    sc = Schedule(m, "count", Const(1))
+    fields = triangle_fields(w.screen_bits, w.sub_bits, setup.channels, max(setup.groups) + 1)
+    v = {f.name: Signal(f.fmt.shape, name=f.name) for f in fields}
+    setup.program(sc, {**v, "tri": Signal(32)})
+    Fragment.get(m, None)                        # (its ROMs are used, for Amaranth's checks)
+    return sum(len(u) for u in sc.mults)
 
 
 @functools.lru_cache(maxsize=None)

@@ -26,7 +26,7 @@ from amaranth.lib.memory import Memory
 from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule
 from ..setup_unit.formats import VALUE
 
-__all__ = ["Link", "walker", "row_engine", "row_queue", "stepper"]
+__all__ = ["Link", "walker", "row_engine", "row_queue", "setup_queue", "stepper"]
 
 
 class Link:
@@ -223,25 +223,77 @@ def row_queue(m, rows, valid, started, space, depth=8):
     m.submodules.row_queue = mem
     wr, rd = mem.write_port(), mem.read_port(domain="comb")
     wptr, rptr = Signal(4, name="rq_wptr"), Signal(4, name="rq_rptr")
-    take, nonempty = Signal(name="rq_take"), Signal(name="rq_valid")
-    level = Signal(range(depth + 1), name="rq_level")    # rows written, not yet taken
-    held = Signal(range(depth + 1), name="rq_held")      # rows started, not yet taken
+    take = Signal(name="rq_take")
+    nonempty, _, _ = credits(m, "rq", started, valid, take, space, depth)
     m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*(rows[k] for k in names))),
                  wr.en.eq(valid), rd.addr.eq(rptr)]
-    # the flags from compares of the registers and the handshakes, not from the sums: a row
-    # is left unless the one row goes; fewer than depth held unless a full queue grows
-    m.d.sync += [held.eq(held + started - take), level.eq(level + valid - take),
-                 nonempty.eq(valid | (level > 1) | (nonempty & ~take)),
+    m.d.sync += [wptr.eq(wptr + valid), rptr.eq(rptr + take)]
+    return _fields(rd.data, rows), nonempty, take
+
+
+def credits(m, name, started, written, take, space, depth):
+    """A queue's flags from its handshakes: ``space`` (the caller's register) while fewer
+    than ``depth`` items are started and not yet taken; ``valid`` (a register) while one is
+    written and not taken. From compares of the registers and the handshakes, not from the
+    sums: an item is left unless the one item goes; fewer than ``depth`` held unless a full
+    queue grows. Returns ``(valid, valid_next, held)``."""
+    level = Signal(range(depth + 1), name=f"{name}_level")    # written, not yet taken
+    held = Signal(range(depth + 1), name=f"{name}_held")      # started, not yet taken
+    valid = Signal(name=f"{name}_valid")
+    valid_next = written | (level > 1) | (valid & ~take)
+    m.d.sync += [held.eq(held + started - take), level.eq(level + written - take),
+                 valid.eq(valid_next),
                  space.eq((held < depth - 1) | ((held == depth - 1) & ~(started & ~take))
-                          | ((held == depth) & take & ~started)),
-                 wptr.eq(wptr + valid), rptr.eq(rptr + take)]
+                          | ((held == depth) & take & ~started))]
+    return valid, valid_next, held
+
+
+def _fields(data, like):
+    """``data`` cut into the fields of ``like`` (a dict of values), in its order."""
     out, at = {}, 0
-    for k in names:
-        n = len(rows[k])
-        out[k] = rd.data[at:at + n]
-        out[k] = out[k].as_signed() if rows[k].shape().signed else out[k]
+    for k, x in like.items():
+        n = len(x)
+        out[k] = data[at:at + n].as_signed() if x.shape().signed else data[at:at + n]
         at += n
-    return out, nonempty, take
+    return out
+
+
+def setup_queue(m, sc, values, space, take, depth=16):
+    """The setup's results, a triangle's a slot of distributed RAM, between an overlapped
+    setup (``sc``, a schedule with an interval) and the walker, with credits: the setup
+    starts a triangle only while ``space`` (a register) promises a slot, so it never stalls.
+    The slot is counted at the start and travels with the triangle (``sq_slot`` and its late
+    copies); each value is written as soon as it is ready, into one of a few memories that
+    each take the values ready within an interval of each other, so no value is kept in a
+    copy for this. Returns ``(values, valid, valid_next, held, offset)``, ``offset`` the one
+    at which the last memory is written; the caller drives ``take`` (only while valid)."""
+    slots = Signal(4, name="sq_slots")                   # 4-bit pointers wrap at 16
+    m.d.sync += slots.eq(slots + sc.start)
+    slot = sc.input("sq_slot", slots)
+    keep = {k: x for k, x in values.items() if not isinstance(x, Const)}
+    groups = []
+    for k in sorted(keep, key=lambda k: sc._when(keep[k])):
+        at = sc._when(keep[k])
+        if not groups or at >= groups[-1][0] + sc.ii:
+            groups.append([at, {}])
+        groups[-1][1][k] = keep[k]
+    rptr = Signal(4, name="sq_rptr")
+    out = {k: x for k, x in values.items() if isinstance(x, Const)}
+    offset = 0
+    for g, (_, vals) in enumerate(groups):
+        at = max(sc._when(x) for x in vals.values())
+        offset = max(offset, at)
+        mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
+        m.submodules[f"setup_queue{g}"] = mem
+        wr, rd = mem.write_port(), mem.read_port(domain="comb")
+        data = sc._late_at(Cat(*vals.values()), at)
+        sc._read(at, data)
+        m.d.comb += [wr.addr.eq(sc.late(slot, at)), wr.data.eq(data), wr.en.eq(sc.at(at)),
+                     rd.addr.eq(rptr)]
+        out.update(_fields(rd.data, vals))
+    valid, valid_next, held = credits(m, "sq", sc.start, sc.at(offset), take, space, depth)
+    m.d.sync += rptr.eq(rptr + take)
+    return out, valid, valid_next, held, offset
 
 
 def stepper(m, w, channels, rows, rows_valid, rows_take, o, flat=()):
