@@ -99,7 +99,8 @@ def test_modes_and_reciprocals_on_amaranth(params):
 
 def test_multiplier_knobs_keep_the_contract():
     """Three setup multipliers and two row-engine multipliers for three channels (the row
-    engine's 23 products every ceil(23 / 2) = 12 clocks, not 6): the same fragments within
+    engine's 18 products, u and v, seven for each quadratic channel and two for the linear
+    one, every ceil(18 / 2) = 9 clocks, not ceil(18 / 4) = 5): the same fragments within
     the same bound, under backpressure, with the latency its schedules state; the setup's
     clocks fall (its critical path, not its products, then sets them: docs/quadratic.md)."""
     params = {**SMALL, "channels": 3, "modes": "exact,xshading,linear", "setup_mults": 3,
@@ -107,7 +108,7 @@ def test_multiplier_knobs_keep_the_contract():
     unit = make_unit("raster", spec=True, **params)
     base = make_unit("raster", spec=True, **{k: v for k, v in params.items()
                                              if not k.endswith("_mults")})
-    assert unit.timing[1] == 12 and base.timing[1] == 6
+    assert unit.timing[1] == 9 and base.timing[1] == 5
     assert unit.timing[0] < base.timing[0]
     p = unit.params
     hard, _ = raster_hard_cases(**p)

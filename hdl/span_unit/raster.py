@@ -133,7 +133,7 @@ class Raster(Unit):
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
         rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat)
-        rows, re, re_valid = row_engine(m, w, ch, rows, rows_in, space, platform, flat,
+        rows, re, re_valid = row_engine(m, w, setup.modes, rows, rows_in, space, platform, flat,
                                         self.params["row_mults"] or ch + 1)
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o, flat)

@@ -8,7 +8,9 @@ Four parts, each a stream stage with backpressure:
   1/2)`` of the edge's crossing and the remainder ``r = i den - num``; a row step adds the
   quotient and remainder of ``2 S dx / (2 S dy)`` and carries once. The long edge runs top to
   bottom; the short one top to middle, then middle to bottom from the middle vertex's row.
-  Columns ``[left, right)`` are the pixels whose centres lie inside (top-left rule). Beside
+  Columns ``[left, right)`` are the pixels whose centres lie inside (top-left rule); a row
+  with none on screen goes no further (two clocks in the walker's buffer, not a row
+  engine's interval, so sliver and off-screen rows cost little). Beside
   them, the exact numerators nu = X y2 - Y x2, nv = Y x1 - X y1 (eq 18-20, sub-pixel units)
   of the left edge's first pixel and of column 0, stepped with additions.
 - ``row_engine`` (a schedule on shared multipliers, a row every ``ii`` clocks): (u, v) from
@@ -26,7 +28,7 @@ from amaranth.lib.memory import Memory
 from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule
 from ..setup_unit.formats import VALUE
 
-__all__ = ["Link", "walker", "row_engine", "row_queue", "setup_queue", "stepper"]
+__all__ = ["Link", "walker", "row_engine", "row_products", "row_queue", "setup_queue", "stepper"]
 
 
 class Link:
@@ -73,18 +75,20 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, fla
     last, at_jm = Signal(), Signal()           # to_j1 == 0, to_jm == 0 (registered)
     rows = src["rows"]                         # not culled, j0 < j1 (the setup's register)
 
+    some = Signal(name="wb_some")              # the buffer's row has a pixel on screen
+
     def control(k):
         """A copy of the walker's state: (have, full, load, accept)."""
         have, full = Signal(name=f"w_have{k}"), Signal(name=f"w_full{k}")
         load, accept = Signal(name=f"w_load{k}"), Signal(name=f"w_accept{k}")
         have_n = Mux(load, rows, have & ~(accept & last))
-        full_n = accept | (full & ~out_link.ready)
+        full_n = accept | (full & some & ~out_link.ready)     # a row of no pixel is dropped
         m.d.sync += [have.eq(have_n), full.eq(full_n), accept.eq(have_n & ~full_n),
                      load.eq(src_valid_next & ~have_n & ~full_n)]
         return have, full, load, accept
 
     have, full, load, accept = control(0)
-    m.d.comb += [src_ready.eq(~have & ~full), out_link.valid.eq(full)]
+    m.d.comb += [src_ready.eq(~have & ~full), out_link.valid.eq(full & some)]
 
     def init(e):     # the walker's remainder i den - num from the setup's floor remainder,
         # held less d (and n as n - d): see _step; the setup computes both (r0, n0)
@@ -140,21 +144,25 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, fla
            **{k: tr[k] for k in ("E_u", "E_v", "B_u", "B_v")}}
     buf = {k: Signal.like(x, name=f"wb_{k}", reset_less=True) for k, x in row.items()}
     _, _, _, accept_b = control("_buf")
+    size = 1 << w.screen_bits                  # [xl, xr) clamped to the screen is not empty
     with m.If(accept_b):
         m.d.sync += [buf[k].eq(x) for k, x in row.items()]
+        m.d.sync += some.eq((row["xl"] < row["xr"]) & (row["xr"] > 0) & (row["xl"] < size))
     # the row engine clamps the span and picks the track (its first clock, not this one's)
     return {**buf, **held}, have
 
 
-def row_engine(m, w, channels, rows, row_link, space, platform=None, flat=(), mults=None):
+def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
-    d = P0 + Pu u + Pv v. The engine never stalls: a row starts only when ``space`` (a
-    register of the row queue) promises a place for it. Returns the row values for the
-    stepper, the schedule and the output's valid bit."""
+    d = P0 + Pu u + Pv v: seven products, two for a linear channel (a = b = c = 0, so
+    Phi = f + u d + v e and d = P0). The engine never stalls: a row starts only when
+    ``space`` (a register of the row queue) promises a place for it. Returns the row values
+    for the stepper, the schedule and the output's valid bit."""
+    channels = len(modes)
     mults = mults or channels + 1
-    ii = -(-(2 + 7 * channels) // mults)
+    ii = -(-row_products(modes) // mults)
     out_valid = Signal(name="re_out_valid")
     sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
@@ -174,22 +182,31 @@ def row_engine(m, w, channels, rows, row_link, space, platform=None, flat=(), mu
     vv = sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True)
     FP = w.FO + w.FQ                                     # fraction bits of coefficient x u
     out = {}
-    for ch in range(channels):
+    for ch, mode in enumerate(modes):
         c = {k: v[f"c{ch}_{k}"] for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")}
-        au, cv, bv = sc.mul(f"au{ch}", c["a"], u), sc.mul(f"cv{ch}", c["c"], vv), \
-            sc.mul(f"bv{ch}", c["b"], vv)
-        pu, pv = sc.mul(f"pu{ch}", c["pu"], u), sc.mul(f"pv{ch}", c["pv"], vv)
-        acv = sc.let(f"acv{ch}", au + cv)
-        t1 = sc.apply(f"t1_{ch}", lambda d, x: fq(((d << w.FQ) + x) >> (FP - w.FT)), c["d"], acv)
-        t2 = sc.apply(f"t2_{ch}", lambda e, x: fq(((e << w.FQ) + x) >> (FP - w.FT)), c["e"], bv)
+        if mode == "linear":           # t1 = d, t2 = e at FT fraction bits: a shift, no sum
+            t1, t2 = (c[k] >> (w.FO - w.FT) for k in "de")
+        else:
+            au, cv, bv = sc.mul(f"au{ch}", c["a"], u), sc.mul(f"cv{ch}", c["c"], vv), \
+                sc.mul(f"bv{ch}", c["b"], vv)
+            pu, pv = sc.mul(f"pu{ch}", c["pu"], u), sc.mul(f"pv{ch}", c["pv"], vv)
+            acv = sc.let(f"acv{ch}", au + cv)
+            t1 = sc.apply(f"t1_{ch}", lambda d, x: fq(((d << w.FQ) + x) >> (FP - w.FT)),
+                          c["d"], acv)
+            t2 = sc.apply(f"t2_{ch}", lambda e, x: fq(((e << w.FQ) + x) >> (FP - w.FT)),
+                          c["e"], bv)
         ut, vt = sc.mul(f"ut{ch}", u, t1), sc.mul(f"vt{ch}", vv, t2)
         shift = w.FQ + w.FT - w.FI
         uvt = sc.let(f"uvt{ch}", (ut + vt) >> shift)
-        puv = sc.let(f"puv{ch}", (pu + pv) >> (FP - w.FI))
-        k = sc._when(uvt, puv)
+        if mode == "linear":
+            k = sc._when(uvt)
+            out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0: p0, c["p0"], after=k)
+        else:
+            puv = sc.let(f"puv{ch}", (pu + pv) >> (FP - w.FI))
+            k = sc._when(uvt, puv)
+            out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0, x: p0 + x, c["p0"], puv, after=k)
         out[f"phi{ch}"] = sc.apply(f"phi{ch}", lambda f, x: (f << (w.FI - w.FO)) + x,
                                    c["f"], uvt, after=k)
-        out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0, x: p0 + x, c["p0"], puv, after=k)
         out[f"c{ch}_a2"] = c["a2"]
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
     # the outputs registered; what the stepper would otherwise compute from the queue's
@@ -207,6 +224,12 @@ def row_engine(m, w, channels, rows, row_link, space, platform=None, flat=(), mu
     sc.finish()
     sc.check()
     return out, sc, out_valid
+
+
+def row_products(modes):
+    """The row engine's products per row: u and v, then seven per quadratic channel and two
+    per linear one."""
+    return 2 + sum(2 if mode == "linear" else 7 for mode in modes)
 
 
 def row_queue(m, rows, valid, started, space, depth=8):
