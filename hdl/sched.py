@@ -27,6 +27,7 @@ from .dsp import mult18
 __all__ = ["Schedule", "OPERAND", "MUL_LAT"]
 
 OPERAND = 35          # signed operand bits: an 18-bit signed top slice, a 17-bit unsigned low one
+NARROW = 18           # a narrow multiplier's signed operand bits: one MULT18X18D, two clocks less
 CAPTURE_SHARE = 256   # enables per copy of a capture enable (``Schedule.inputs``)
 MUL_LAT = 4           # issue (operands muxed) -> operand regs -> partial products -> two adds
 
@@ -37,11 +38,13 @@ def _deps(value):
 
 class Schedule:
     def __init__(self, m, name, en, ii=None, mults=1, shift=None, mux_groups=None,
-                 platform=None):
+                 platform=None, narrow=0):
         """``shift = (amount, left)``: products asked for ``shifted`` come out as
         ``(a * b << left) >> amount``, two clocks later (one two-stage shifter per multiplier
         that has such products; ``amount`` must be steady over the job). ``platform``: the
-        multipliers' blocks are instantiated with their registers on ECP5 (:mod:`hdl.dsp`)."""
+        multipliers' blocks are instantiated with their registers on ECP5 (:mod:`hdl.dsp`).
+        ``narrow``: multipliers of one 18 x 18 block each, for the products whose operands
+        fit ``NARROW`` signed bits (all of those, when there are any narrow ones)."""
         self.m, self.name, self.en, self.ii, self.shift = m, name, en, ii, shift
         self.platform = platform
         # with many operations per multiplier: the operand multiplexer in two registered
@@ -53,6 +56,8 @@ class Schedule:
         self.written = SignalDict()                      # register -> offset written
         self.reads = SignalDict()                        # register -> last offset read
         self.mults = [[] for _ in range(mults)]          # per multiplier: (offset, a, b)
+        self.narrow = [[] for _ in range(narrow)]        # the same, 18 x 18
+        self.fits = 0                                    # products a narrow one can take
         self.length = 1                                  # offsets used
         self.outputs = SignalSet()                       # read by the next stage, not here
 
@@ -147,8 +152,13 @@ class Schedule:
             if len(x) + (0 if x.shape().signed else 1) > OPERAND:
                 raise ValueError(f"{self.name}.{name}: operand of {len(x)} bits")
         k = self._when(a, b, after=after)
+        fits = not shifted and all(len(x) + (0 if x.shape().signed else 1) <= NARROW
+                                   for x in (a, b))
+        self.fits += fits
+        units = ([(True, i, u) for i, u in enumerate(self.narrow)] if fits and self.narrow
+                 else [(False, i, u) for i, u in enumerate(self.mults)])
         while True:
-            for idx, unit in enumerate(self.mults):
+            for narrow, idx, unit in units:
                 used = [o for o, _, _ in unit]
                 if self.ii is None:
                     free = k not in used
@@ -160,7 +170,7 @@ class Schedule:
             else:
                 k += 1
                 if self.ii is not None and k > self.length + self.ii:
-                    raise ValueError(f"{self.name}: more products than {len(self.mults)} "
+                    raise ValueError(f"{self.name}: more products than {len(units)} "
                                      f"multipliers take every {self.ii} clocks")
                 continue
             break
@@ -168,7 +178,10 @@ class Schedule:
             a, b = self._late_at(a, k), self._late_at(b, k)
             unit[-1] = (k, a, b)
         self._read(k, a, b)
-        total, lat = self._total(idx), self.lat
+        if narrow:
+            total, lat = self._total(idx, True), self.lat - 2
+        else:
+            total, lat = self._total(idx), self.lat
         if shifted:                       # the amount is read with the product's sum
             amount = self.late(self.shift[0], k + self.lat)
             total, lat = self._shifted(idx, amount), self.lat + 2
@@ -197,11 +210,14 @@ class Schedule:
             self._shifters[idx] = amount, reg
         return self._shifters[idx][1]
 
-    def _total(self, idx):
+    def _total(self, idx, narrow=False):
+        """A multiplier's product: a register (wide), or the block's output (narrow)."""
         if not hasattr(self, "_totals"):
             self._totals = [Signal(signed(2 * OPERAND), name=f"{self.name}_m{n}_sum",
                                    reset_less=True) for n in range(len(self.mults))]
-        return self._totals[idx]
+            self._ntotals = [Signal(signed(2 * NARROW), name=f"{self.name}_n{n}_p")
+                             for n in range(len(self.narrow))]
+        return (self._ntotals if narrow else self._totals)[idx]
 
     def rom(self, name, lut, addr):
         """``lut[addr]``: a synchronous read, then its own register (the RAM's clock to output
@@ -342,36 +358,43 @@ class Schedule:
     def _multipliers(self):
         """The multipliers: each operand a one-hot AND-OR over its distinct operands, registered;
         four partial products registered; the middle two summed beside the outer two
-        (concatenated: they do not overlap), then one addition."""
-        for idx, unit in enumerate(self.mults):
-            if not unit:
-                continue
-            n = f"{self.name}_m{idx}"
-            opa, opb = _operands(self, n, unit)
-            if self.mux_groups:
-                opa, opb = (self._grouped(f"{n}_{x}", terms) for x, terms in (("a", opa),
-                                                                          ("b", opb)))
-            opa, opb = _or_tree(opa), _or_tree(opb)
-            ra = Signal(signed(OPERAND), name=f"{n}_a")         # registered in the blocks
-            rb = Signal(signed(OPERAND), name=f"{n}_b")
-            self.m.d.comb += [ra.eq(opa), rb.eq(opb)]
-            lo = OPERAND - 18
-            xs = {"h": (ra[lo:].as_signed(), rb[lo:].as_signed()),
-                  "l": (ra[:lo], rb[:lo])}
-            part = {pa + pb: mult18(self.m, f"{n}_{pa}{pb}", xs[pa][0], xs[pb][1], self.en,
-                                    self.platform) for pa in "hl" for pb in "hl"}
-            mid = Signal(signed(38), name=f"{n}_mid", reset_less=True)
-            outer = Signal(signed(2 * OPERAND), name=f"{n}_outer", reset_less=True)
-            with self.m.If(self.en):
-                self.m.d.sync += [mid.eq(part["hl"] + part["lh"]),
-                                  outer.eq(Cat(part["ll"][:2 * lo], part["hh"]))]
-                self.m.d.sync += self._total(idx).eq(outer + (mid << lo))
+        (concatenated: they do not overlap), then one addition. A narrow one: one block, its
+        operands and product registered in it."""
+        for narrow, units in ((False, self.mults), (True, self.narrow)):
+            bits = NARROW if narrow else OPERAND
+            for idx, unit in enumerate(units):
+                if not unit:
+                    continue
+                n = f"{self.name}_{'n' if narrow else 'm'}{idx}"
+                opa, opb = _operands(self, n, unit, bits)
+                if self.mux_groups:
+                    opa, opb = (self._grouped(f"{n}_{x}", terms, bits)
+                                for x, terms in (("a", opa), ("b", opb)))
+                opa, opb = _or_tree(opa), _or_tree(opb)
+                ra = Signal(signed(bits), name=f"{n}_a")         # registered in the blocks
+                rb = Signal(signed(bits), name=f"{n}_b")
+                self.m.d.comb += [ra.eq(opa), rb.eq(opb)]
+                if narrow:
+                    p = mult18(self.m, f"{n}_x", ra, rb, self.en, self.platform)
+                    self.m.d.comb += self._total(idx, True).eq(p)
+                    continue
+                lo = OPERAND - 18
+                xs = {"h": (ra[lo:].as_signed(), rb[lo:].as_signed()),
+                      "l": (ra[:lo], rb[:lo])}
+                part = {pa + pb: mult18(self.m, f"{n}_{pa}{pb}", xs[pa][0], xs[pb][1], self.en,
+                                        self.platform) for pa in "hl" for pb in "hl"}
+                mid = Signal(signed(38), name=f"{n}_mid", reset_less=True)
+                outer = Signal(signed(2 * OPERAND), name=f"{n}_outer", reset_less=True)
+                with self.m.If(self.en):
+                    self.m.d.sync += [mid.eq(part["hl"] + part["lh"]),
+                                      outer.eq(Cat(part["ll"][:2 * lo], part["hh"]))]
+                    self.m.d.sync += self._total(idx).eq(outer + (mid << lo))
 
-    def _grouped(self, name, terms):
+    def _grouped(self, name, terms, bits=OPERAND):
         """The first level of a two-level operand multiplexer: each group's OR registered."""
         out = []
         for g, at in enumerate(range(0, len(terms), self.mux_groups)):
-            reg = Signal(signed(OPERAND), name=f"{name}_g{g}", reset_less=True)
+            reg = Signal(signed(bits), name=f"{name}_g{g}", reset_less=True)
             with self.m.If(self.en):
                 self.m.d.sync += reg.eq(_or_tree(terms[at:at + self.mux_groups]))
             out.append(reg)
@@ -417,7 +440,7 @@ def _key(value):
     return repr(value), tuple(sorted(id(s) for s in _deps(value)))
 
 
-def _operands(sc, n, unit):
+def _operands(sc, n, unit, bits=OPERAND):
     """Each side's multiplexer terms: one per distinct operand, selected by the OR of the
     phase bits of the products that use it. A product's operands are swapped where that lets
     a side reuse an operand it already has (a b = b a): fewer, narrower AND-OR trees."""
@@ -431,7 +454,7 @@ def _operands(sc, n, unit):
     terms = ([], [])
     for side, name in enumerate("ab"):
         for j, (value, ks) in enumerate(sides[side].values()):
-            sig = Signal(signed(OPERAND), name=f"{n}_{name}{j}")
+            sig = Signal(signed(bits), name=f"{n}_{name}{j}")
             sc.m.d.comb += sig.eq(value)
             if min(ks) > 0:     # the select a register: the OR of the phase bits a clock early
                 sel = Signal(name=f"{n}_{name}{j}_sel")

@@ -123,13 +123,14 @@ def test_multiplier_knobs_keep_the_contract():
 
 
 def test_overlapped_setup_keeps_the_contract():
-    """The setup overlapping triangles, one every 12 clocks on six multipliers: its edge
-    divisions (14 quotient bits at 64 x 64) take two dividers in turn, its results a queue
-    with credits. The same fragments within the same bound under backpressure, the culled
-    count, and the latency its schedule states; back to back, small triangles come through
-    at the interval (a cycle count, not a timing test)."""
+    """The setup overlapping triangles, one every 12 clocks on four wide multipliers and
+    three 18 x 18 ones (the products of coordinates, Widths.wpos): its edge divisions (14
+    quotient bits at 64 x 64) take two dividers in turn, its results a queue with credits.
+    The same fragments within the same bound under backpressure, the culled count, and the
+    latency its schedule states; back to back, small triangles come through at the interval
+    (a cycle count, not a timing test)."""
     params = {**SMALL, "channels": 3, "modes": "exact,xshading,linear", "setup_ii": 12,
-              "setup_mults": 6}
+              "setup_mults": 4, "setup_narrow": 3}
     unit = make_unit("raster", spec=True, **params)
     assert unit.timing[0] == 12
     p = unit.params
@@ -238,7 +239,11 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
     ({"setup_mults": 0}, "setup_mults must be in 1..6"),
     # 52 products: Omega 2, the edges' numerators 6, two Newton steps 4, the numerator
     # tracks 16, alpha 2, and 11 for each X-shading channel (a, b, c 3; Pu, Pv, P0, 2A 8)
-    ({"setup_ii": 8}, "setup_ii=8 is too short: the setup's 52 products on setup_mults=1 "
+    # of those, 30 fit 18 x 18: Omega 2, the edges' 6, the tracks' 16 and a, b, c 3 each
+    ({"setup_ii": 16, "setup_narrow": 1}, "setup_ii=16 is too short: the 30 of the setup's "
+                                           "products that fit 18 x 18 on setup_narrow=1 take "
+                                           "at least 30 clocks"),
+    ({"setup_ii": 8}, "setup_ii=8 is too short: the setup's 52 products on setup_mults=1 wide "
                       "multiplier(s) take at least 52 clocks; at this interval they need "
                       "setup_mults=7, more than the 6 allowed"),
 ])

@@ -67,6 +67,11 @@ class Widths:
         return 2 * self.wrel
 
     @property
+    def wpos(self):                    # offsets of pixel centres from the top vertex (X, Y),
+        # the edges' numerator factors and row steps in sub-pixel units: |x| < 2**(wc + 1)
+        return self.wc + 2             # (so at every screen a product of two is 18 x 18)
+
+    @property
     def wn(self):                      # (u, v) numerators, tracked modulo 2**wn
         return 2 * self.wrel + 2
 
@@ -171,6 +176,7 @@ class Setup:
         returns the walker's values (registers)."""
         w, S = self.w, 1 << self.w.sub_bits
         size = 1 << w.screen_bits
+        pos = lambda x: x[:w.wpos].as_signed()                         # see Widths.wpos
         tri = v["tri"]
         v = sc.lets(**self.sort(sc, dict(v)))                                       # sort
         xt, yt = v["x0"], v["y0"]
@@ -196,7 +202,8 @@ class Setup:
             d = sc.lets(**{f"{e}_dx": v[qx] - v[px], f"{e}_dy": v[qy] - v[py]})
             dx, dy = d[f"{e}_dx"], d[f"{e}_dy"]
             den = sc.let(f"{e}_n", Mux(dy.any(), 2 * S * dy, 1)[:w.wden])
-            fac = sc.lets(**{f"{e}_fx": 2 * v[px] - S, f"{e}_fy": 2 * S * r[j] + S - 2 * v[py]})
+            fac = sc.lets(**{f"{e}_fx": pos(2 * v[px] - S), f"{e}_fy": pos(2 * S * r[j] + S
+                                                                             - 2 * v[py])})
             num = sc.let(f"{e}_num", sc.mul(f"{e}_ndy", fac[f"{e}_fx"], dy)
                          + sc.mul(f"{e}_ndx", fac[f"{e}_fy"], dx) + den - 1)
             div_jobs += [(e, "i", num, den, w.wi - 1), (e, "q", 2 * S * dx, den, w.qstep)]
@@ -286,9 +293,12 @@ class Setup:
         sel = sc.lets(**{f"sel_{k}": Mux(out["left_long"], out[f"l_{k}"],
                                          Mux(first_short, out[f"t_{k}"], out[f"s_{k}"]))
                          for k in ("i", "q")})
-        pos = sc.lets(X0=S // 2 - xt, Y0=S * r["j0"] + S // 2 - yt, Ym=S * r["jm"] + S // 2 - yt,
-                      Xe=S * sel["sel_i"] + S // 2 - xt, Xt=S * out["t_i"] + S // 2 - xt,
-                      qe=sel["sel_q"], qt=out["t_q"])
+        # each within +-2**(wc + 1) (Widths.wpos); a step quotient too, on an edge that is
+        # walked (dy > 0: |dx / dy| < 2**wc; a flat edge's is never read)
+        pos = sc.lets(**{k: x[:w.wpos].as_signed() for k, x in (
+            ("X0", S // 2 - xt), ("Y0", S * r["j0"] + S // 2 - yt),
+            ("Ym", S * r["jm"] + S // 2 - yt), ("Xe", S * sel["sel_i"] + S // 2 - xt),
+            ("Xt", S * out["t_i"] + S // 2 - xt), ("qe", sel["sel_q"]), ("qt", out["t_q"]))})
         tr = {"fs": {"first_short": first_short}}      # the walker's choice at its load too
 
         def pair(name, X, Y):

@@ -36,30 +36,39 @@ class Raster(Unit):
            "forward-difference span engine; many fragments per triangle")
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
               "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0,
-              "setup_mults": 1, "row_mults": 0, "setup_ii": 0}
+              "setup_mults": 1, "row_mults": 0, "setup_ii": 0, "setup_narrow": 0}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "groups": None,     # a string: parse_groups checks it
               "flat": (0, 8),
               "setup_mults": (1, 6),     # the setup's multipliers (35 x 35, four MULT18X18D each)
               "row_mults": (0, 13),      # the row engine's; 0: one per channel and one more
-              "setup_ii": (0, 255)}      # clocks between triangles in the setup; 0: one at a time
+              "setup_ii": (0, 255),      # clocks between triangles in the setup; 0: one at a time
+              "setup_narrow": (0, 6)}    # the setup's 18 x 18 multipliers (one MULT18X18D each)
     PER_CHANNEL = ("modes", "groups")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups,
-                 flat, setup_mults, row_mults, setup_ii):
+                 flat, setup_mults, row_mults, setup_ii, setup_narrow):
         parse_modes(modes, channels)
         self.groups = max(parse_groups(groups, channels)) + 1
         if row_mults > channels + 1:          # sharing only: ii stays at or above the default's
             raise ValueError(f"row_mults must be at most channels + 1 = {channels + 1} (0: "
                              f"that many), not {row_mults}")
         if setup_ii:
-            n = _products(screen_bits, sub_bits, channels, modes, recip, recip_iters, groups)
+            n, fits = _products(screen_bits, sub_bits, channels, modes, recip, recip_iters,
+                                groups)
+            if setup_narrow:                 # the narrow ones take every product that fits
+                if setup_ii * setup_narrow < fits:
+                    raise ValueError(f"setup_ii={setup_ii} is too short: the {fits} of the "
+                                     f"setup's products that fit 18 x 18 on setup_narrow="
+                                     f"{setup_narrow} take at least "
+                                     f"{-(-fits // setup_narrow)} clocks")
+                n -= fits
             if setup_ii * setup_mults < n:
                 need, top = -(-n // setup_ii), self.RANGES["setup_mults"][1]
                 raise ValueError(f"setup_ii={setup_ii} is too short: the setup's {n} products "
-                                 f"on setup_mults={setup_mults} multiplier(s) take at least "
+                                 f"on setup_mults={setup_mults} wide multiplier(s) take at least "
                                  f"{-(-n // setup_mults)} clocks; at this interval they need "
                                  f"setup_mults={need}"
                                  + (f", more than the {top} allowed" if need > top else ""))
@@ -109,7 +118,7 @@ class Raster(Unit):
             m.d.sync += count.eq(count + 1)
         ii = self.params["setup_ii"] or None
         sc = Schedule(m, "su", Const(1), ii=ii, mults=self.params["setup_mults"], mux_groups=8,
-                      platform=platform)
+                      platform=platform, narrow=self.params["setup_narrow"])
         flat = [f.name for f in self.flat_fields]
         src_ready = Signal()
         inputs = {**{f.name: self.i.payload[f.name] for f in self.inputs}, "tri": count}
@@ -174,7 +183,8 @@ class Raster(Unit):
 
 @functools.lru_cache(maxsize=None)
 def _products(*params):
-    """The setup's products per triangle (its program on a schedule of its own)."""
+    """The setup's products per triangle, and how many of them fit a narrow multiplier (its
+    program on a schedule of its own)."""
     from amaranth.hdl import Module
     setup = Setup(*params)
     m, w = Module(), setup.w
@@ -183,7 +193,7 @@ def _products(*params):
     v = {f.name: Signal(f.fmt.shape, name=f.name) for f in fields}
     setup.program(sc, {**v, "tri": Signal(32)})
     Fragment.get(m, None)                        # (its ROMs are used, for Amaranth's checks)
-    return sum(len(u) for u in sc.mults)
+    return sum(len(u) for u in sc.mults), sc.fits
 
 
 @functools.lru_cache(maxsize=None)
