@@ -109,6 +109,14 @@ def configurations(quick=False, knobs=None):
         hw = {"setup_mults": n}
         rows.append(_row("setup multipliers", str(n), raster(**hw), scene="default",
                          hardware=hw, unit=unit_raster(**hw), default=n == 1))
+    # the setup overlapping triangles: one every setup_ii clocks, on wide (four MULT18X18D)
+    # and narrow (one) multipliers; the default takes one triangle at a time
+    for label, hw in (("one at a time", {}),
+                      ("27, 2 wide", {"setup_ii": 27, "setup_mults": 2}),
+                      ("16, 2 wide + 2 narrow", {"setup_ii": 16, "setup_mults": 2,
+                                                 "setup_narrow": 2})):
+        rows.append(_row("setup interval", label, raster(**hw), scene="default",
+                         hardware=hw, unit=unit_raster(**hw), default=not hw))
     for n in (0, 2, 3):
         hw = {"row_mults": n}
         rows.append(_row("row multipliers", "one per channel + 1" if n == 0 else str(n),
