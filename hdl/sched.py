@@ -184,18 +184,17 @@ class Schedule:
             total, lat = self._total(idx), self.lat
         if shifted:                       # the amount is read with the product's sum
             amount = self.late(self.shift[0], k + self.lat)
-            total, lat = self._shifted(idx, amount), self.lat + 2
+            total, lat = self._shifted(idx, amount, k + self.lat), self.lat + 2
             self._read(k + self.lat, amount)
         self.length = max(self.length, k + lat + 1)
         value = post(total) if post else total[:natural].as_signed()
         return self._write(name, value, k + lat, shape)
 
-    def _shifted(self, idx, amount):
+    def _shifted(self, idx, amount, at):
+        """Multiplier ``idx``'s shifter, reading ``amount`` at offset ``at`` (with ``ii``, its
+        products may read it from different copies: the phase picks, see finish)."""
         if not hasattr(self, "_shifters"):
             self._shifters = {}
-        if idx in self._shifters and self._shifters[idx][0] is not amount:
-            raise ValueError(f"{self.name}: multiplier {idx}'s shifted products read the "
-                             f"amount from different copies")
         if idx not in self._shifters:
             left = self.shift[1]
             total = self._total(idx)
@@ -204,11 +203,26 @@ class Schedule:
             reg = Signal(signed(len(total) + left), name=f"{self.name}_m{idx}_shifted",
                          reset_less=True)
             low = Signal(3, name=f"{self.name}_m{idx}_low", reset_less=True)
-            with self.m.If(self.en):            # two stages: by amount's high bits, then low
-                self.m.d.sync += [coarse.eq((total << left) >> Cat(Const(0, 3), amount[3:])),
+            self._shifters[idx] = [], (total << left, coarse, low, reg)
+        self._shifters[idx][0].append((at, amount))
+        return self._shifters[idx][1][3]
+
+    def _build_shifters(self):
+        """The shifters: two stages, by the amount's high bits, then its low ones."""
+        for reads, (value, coarse, low, reg) in getattr(self, "_shifters", {}).values():
+            copies = []
+            for at, amount in reads:
+                if not any(amount is c for _, c in copies):
+                    copies.append((at, amount))
+            if len(copies) == 1:
+                amount = copies[0][1]
+            else:                         # one copy per read offset: a one-hot AND-OR
+                amount = _or_tree([Mux(_or_tree([self.at(at) for at, c in reads
+                                                 if c is amount]), amount, 0)
+                                   for _, amount in copies])
+            with self.m.If(self.en):
+                self.m.d.sync += [coarse.eq(value >> Cat(Const(0, 3), amount[3:])),
                                   low.eq(amount[:3]), reg.eq(coarse >> low)]
-            self._shifters[idx] = amount, reg
-        return self._shifters[idx][1]
 
     def _total(self, idx, narrow=False):
         """A multiplier's product: a register (wide), or the block's output (narrow)."""
@@ -354,6 +368,7 @@ class Schedule:
         if self.ii is not None:
             self._align()
         self._multipliers()
+        self._build_shifters()
 
     def _multipliers(self):
         """The multipliers: each operand a one-hot AND-OR over its distinct operands, registered;

@@ -122,17 +122,22 @@ def test_multiplier_knobs_keep_the_contract():
     assert info["latency"] == unit.latency
 
 
-def test_overlapped_setup_keeps_the_contract():
-    """The setup overlapping triangles, one every 12 clocks on four wide multipliers and
-    three 18 x 18 ones (the products of coordinates, Widths.wpos): its edge divisions (14
-    quotient bits at 64 x 64) take two dividers in turn, its results a queue with credits.
-    The same fragments within the same bound under backpressure, the culled count, and the
-    latency its schedule states; back to back, small triangles come through at the interval
-    (a cycle count, not a timing test)."""
-    params = {**SMALL, "channels": 3, "modes": "exact,xshading,linear", "setup_ii": 12,
-              "setup_mults": 4, "setup_narrow": 3}
+@pytest.mark.parametrize("params", [
+    {"modes": "exact,xshading,linear", "setup_ii": 12, "setup_mults": 4, "setup_narrow": 3},
+    {"modes": "linear,xshading,xshading", "setup_ii": 24, "setup_mults": 1, "setup_narrow": 2}])
+def test_overlapped_setup_keeps_the_contract(params):
+    """The setup overlapping triangles: one every 12 clocks on four wide multipliers and
+    three 18 x 18 ones (the products of coordinates, Widths.wpos), its edge divisions (14
+    quotient bits at 64 x 64) on two dividers in turn; or one every 24 on one wide and two
+    narrow, whose shifter reads the shift amount from two copies (alpha's two products 24
+    clocks apart or more). Its results go through a queue with credits. The same fragments
+    within the same bound under backpressure, the culled count, and the latency its schedule
+    states; back to back, small triangles come through at the interval (a cycle count, not a
+    timing test)."""
+    ii = params["setup_ii"]
+    params = {**SMALL, "channels": 3, **params}
     unit = make_unit("raster", spec=True, **params)
-    assert unit.timing[0] == 12
+    assert unit.timing[0] == ii
     p = unit.params
     hard, labels = raster_hard_cases(**p)
     extra = random_triangles(np.random.default_rng(9), 12, **p)
@@ -145,13 +150,13 @@ def test_overlapped_setup_keeps_the_contract():
     _, info = stream("raster", one, "amaranth", params)
     assert info["latency"] == unit.latency
     # 40 triangles that cover no pixel (between two rows' centres: no row, no span): each
-    # costs the setup its interval and the walker a clock, so 40 take latency + 40 x 12
+    # costs the setup its interval and the walker a clock, so 40 take latency + 40 ii
     tiny = random_triangles(np.random.default_rng(2), 40, **p, size=1)
     for c in ("y0", "y1", "y2"):
         tiny[c][:] = 2 * (1 << p["sub_bits"]) + np.arange(3)[("y0", "y1", "y2").index(c)]
     out, info = stream("raster", tiny, "amaranth", params)
     check(tiny, out, p)
-    assert info["cycles"] <= unit.latency + 40 * 12 + 2, (info["cycles"], unit.latency)
+    assert info["cycles"] <= unit.latency + 40 * ii + 2, (info["cycles"], unit.latency)
 
 
 @pytest.mark.parametrize("simulator,name", list(per_simulator(["raster"], only=("verilator",))))
