@@ -122,10 +122,16 @@ def test_multiplier_knobs_keep_the_contract():
     assert info["latency"] == unit.latency
 
 
-@pytest.mark.parametrize("params", [
+OVERLAPPED = [
     {"modes": "exact,xshading,linear", "setup_ii": 12, "setup_mults": 4, "setup_narrow": 3},
-    {"modes": "linear,xshading,xshading", "setup_ii": 24, "setup_mults": 1, "setup_narrow": 2}])
-def test_overlapped_setup_keeps_the_contract(params):
+    {"modes": "linear,xshading,xshading", "setup_ii": 24, "setup_mults": 1, "setup_narrow": 2}]
+
+
+@pytest.mark.parametrize("simulator,params", [
+    *(pytest.param("amaranth", p, id=f"amaranth-ii{p['setup_ii']}") for p in OVERLAPPED),
+    *(pytest.param(c.values[0], OVERLAPPED[0], id=f"{c.id}-ii12", marks=c.marks)
+      for c in per_simulator(["raster"], only=("verilator",)))])
+def test_overlapped_setup_keeps_the_contract(simulator, params):
     """The setup overlapping triangles: one every 12 clocks on four wide multipliers and
     three 18 x 18 ones (the products of coordinates, Widths.wpos), its edge divisions (14
     quotient bits at 64 x 64) on two dividers in turn; or one every 24 on one wide and two
@@ -142,19 +148,19 @@ def test_overlapped_setup_keeps_the_contract(params):
     hard, labels = raster_hard_cases(**p)
     extra = random_triangles(np.random.default_rng(9), 12, **p)
     inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
-    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=0.7, seed=4)
+    out, info = stream("raster", inputs, simulator, params, p_valid=0.8, p_ready=0.7, seed=4)
     check(inputs, out, p)
     assert info["culled"] == raster.culled(inputs)
     k = labels.index("whole screen")
     one = {f: hard[f][k:k + 1] for f in hard}
-    _, info = stream("raster", one, "amaranth", params)
+    _, info = stream("raster", one, simulator, params)
     assert info["latency"] == unit.latency
     # 40 triangles that cover no pixel (between two rows' centres: no row, no span): each
     # costs the setup its interval and the walker a clock, so 40 take latency + 40 ii
     tiny = random_triangles(np.random.default_rng(2), 40, **p, size=1)
     for c in ("y0", "y1", "y2"):
         tiny[c][:] = 2 * (1 << p["sub_bits"]) + np.arange(3)[("y0", "y1", "y2").index(c)]
-    out, info = stream("raster", tiny, "amaranth", params)
+    out, info = stream("raster", tiny, simulator, params)
     check(tiny, out, p)
     assert info["cycles"] <= unit.latency + 40 * ii + 2, (info["cycles"], unit.latency)
 
