@@ -22,11 +22,12 @@ $(STAMP): pyproject.toml
 	touch $@
 
 # The main job: a scene through the RTL of the pipeline it calls for, beside the float model
-# and the reference: make render [SCENE=scenes/default.toml] [SIM=verilator|amaranth|icarus].
+# and the reference: make render [SCENE=scenes/default.toml] [SIM=verilator|amaranth|icarus]
+# [RASTER=setup_ii=16,setup_mults=2,setup_narrow=2] (the raster's build knobs).
 # Writes build/render/<scene>/{rtl,model,reference,diff}.png and metrics.json.
 SCENE   ?= scenes/default.toml
 render: setup
-	$(PY) -m sim render $(SCENE) --simulator $(if $(filter command line,$(origin SIM)),$(SIM),verilator)$(if $(TEXTURE), --texture $(TEXTURE))
+	$(PY) -m sim render $(SCENE) --simulator $(if $(filter command line,$(origin SIM)),$(SIM),verilator)$(if $(TEXTURE), --texture $(TEXTURE))$(if $(RASTER), --raster $(RASTER))
 
 # Every scene in scenes/, and one contact sheet: build/render/gallery.png.
 gallery: setup

@@ -135,7 +135,29 @@ def cmd_render(args):
         raise UsageError(f"--mem-latency must be at least 1 and --mem-ready in (0, 1], not "
                          f"{args.mem_latency} and {args.mem_ready}")
     render(args.scene, args.out, args.simulator, size, mem_latency=args.mem_latency,
-           mem_ready=args.mem_ready, hardware={"texture": args.texture})
+           mem_ready=args.mem_ready, hardware={"texture": args.texture,
+                                               **_raster_knobs(args.raster)})
+
+
+RASTER_KNOBS = ("setup_ii", "setup_mults", "setup_narrow", "row_mults", "recip", "recip_iters")
+
+
+def _raster_knobs(text):
+    """``--raster setup_ii=16,setup_mults=2``: the raster's build knobs (docs/quadratic.md),
+    each checked by the pipeline's own ranges."""
+    out = {}
+    for item in filter(None, (text or "").split(",")):
+        key, sep, value = (x.strip() for x in item.partition("="))
+        if not sep or key not in RASTER_KNOBS:
+            raise UsageError(f"--raster: {item!r} is not KNOB=VALUE with a knob of "
+                             f"{', '.join(RASTER_KNOBS)}")
+        if key == "recip":
+            out[key] = value
+        elif value.isdigit():
+            out[key] = int(value)
+        else:
+            raise UsageError(f"--raster: {key} must be a whole number, not {value!r}")
+    return out
 
 
 def params_for(names, pairs, chosen):
@@ -252,6 +274,11 @@ def main(argv=None):
                    help="bump scenes: the texels in external memory behind the texel cache "
                         "(default), or in an on-chip RAM that the host loads (maps up to "
                         "128 x 128)")
+    p.add_argument("--raster", metavar="KNOB=N,...",
+                   help="the raster's build knobs: setup_ii (a triangle every N clocks in the "
+                        "setup; 0, the default: one at a time), setup_mults, setup_narrow "
+                        "(its 35 x 35 and 18 x 18 multipliers), row_mults, recip, recip_iters "
+                        "(docs/quadratic.md); e.g. setup_ii=16,setup_mults=2,setup_narrow=2")
     p = sub.add_parser("check", help="golden vectors through the RTL, or your outputs against "
                                      "golden; one verdict per unit")
     p.add_argument("unit", nargs="?", choices=sorted(UNITS))

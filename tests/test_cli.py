@@ -280,3 +280,17 @@ def test_batch_trace_window(tmp_path):
     assert any("i_texel_x" in line for line in lines)
     _fails(cli("sim", "run", "texel_decode", "--in", str(tmp_path / "in.npz"), "--out",
                str(tmp_path / "out.npz"), "--trace-window", "10:50"), "needs --trace")
+
+
+@pytest.mark.parametrize("arg,message", [
+    ("foo=1", "--raster: 'foo=1' is not KNOB=VALUE with a knob of setup_ii"),
+    ("setup_ii=fast", "--raster: setup_ii must be a whole number, not 'fast'"),
+    ("setup_narrow=9", "setup_narrow must be in 0..6"),
+    ("setup_ii=8", "setup_ii=8 is too short: the setup's 54 products")])
+def test_render_raster_knobs_are_checked(arg, message, tmp_path):
+    """``sim render --raster``: a wrong knob or setting is one line naming it, exit 2."""
+    r = cli("sim", "render", "scenes/default.toml", "--out", str(tmp_path / "o"),
+            "--simulator", "amaranth", "--raster", arg)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert message in r.stderr, r.stderr
+    assert "UnusedElaboratable" not in r.stderr, r.stderr

@@ -157,9 +157,13 @@ def test_small_scene_rtl_matches_model(simulator, name, tmp_path):
         assert (tmp_path / f).stat().st_size > 0
 
 
+OVERLAPPED = {"setup_ii": 16, "setup_mults": 2, "setup_narrow": 2}   # docs/quadratic.md
+
+
 @pytest.mark.skipif(bool(available("verilator")), reason=f"verilator: {available('verilator')}")
 @pytest.mark.parametrize("scene,tables", [
     ("default", {"mesh": {"segments": [96, 64]}}),
+    ("default", {"mesh": {"segments": [96, 64]}, "hardware": OVERLAPPED}),
     ("default", {"camera": {"eye": [0.0, -35.0, 25.0]}, "image": {"width": 48, "height": 48}}),
     # each a model of its own: make soak runs them (the raster's empty triangles are the same
     # walker whatever the channels' modes; the bump methods' are all in make test)
@@ -168,17 +172,21 @@ def test_small_scene_rtl_matches_model(simulator, name, tmp_path):
                            "image": {"width": 48, "height": 48}}, marks=pytest.mark.long),
     pytest.param("phong", {"camera": {"eye": [0.0, -35.0, 25.0]},
                            "image": {"width": 48, "height": 48}}, marks=pytest.mark.long)],
-    ids=["xshading-dense", "xshading-far", "linear-dense", "exact-far", "phong-far"])
+    ids=["xshading-dense", "xshading-dense-overlapped", "xshading-far", "linear-dense",
+         "exact-far", "phong-far"])
 def test_dense_scenes_render(scene, tables):
     """Dense meshes (runs of triangles that cover no pixel: sub-pixel ones, and a torus seen
     from far away) through each shading method's pipeline on the batch path, at 64 x 64
     (the default scene's model at that size, above): every fragment the model's, in its order,
-    and each pixel within one level of it (the shading units are bit-exact or within one)."""
+    and each pixel within one level of it (the shading units are bit-exact or within one).
+    Once with the setup overlapping triangles (a triangle every 16 clocks), under stalls."""
     from sim.run import simulate
     data = tomllib.loads(open(f"{SCENES}/{scene}.toml").read()) if scene != "default" else {}
+    tables = dict(tables)
+    hardware = tables.pop("hardware", None)
     for key, table in {"image": {"width": 64, "height": 64}, **tables}.items():
         data.setdefault(key, {}).update(table)
-    prep = S.prepare(S.parse(data, "dense"))
+    prep = S.prepare(S.parse(data, "dense"), hardware)
     out, _ = simulate("scene", prep["params"], S.rtl_inputs(prep), "verilator",
                       p_valid=0.9, p_ready=0.7, seed=4)
     frag, _ = S.model_fragments(prep)

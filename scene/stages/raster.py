@@ -33,7 +33,8 @@ class Raster(Stage):
         self.params = dict(screen_bits=q["screen_bits"], sub_bits=q["sub_bits"],
                            channels=len(channels), modes=",".join(m for _, m, _ in channels),
                            recip=q["recip"], recip_iters=q["recip_iters"])
-        self.params.update({k: q[k] for k in ("setup_mults", "row_mults", "setup_ii", "setup_narrow")
+        knobs = ("setup_mults", "row_mults", "setup_ii", "setup_narrow")
+        self.params.update({k: q[k] for k in knobs
                             if q[k] != RasterUnit.PARAMS[k]})      # defaults: Verilog unchanged
         if any(g for _, _, g in channels):
             self.params["groups"] = ",".join(str(g) for _, _, g in channels)
@@ -43,6 +44,7 @@ class Raster(Stage):
         self.why = (f"shading.method = {q['method']}" if q["bump"] == "none" else
                     f"bump.method = {q['bump']}") + f": channels {', '.join(names)}" + \
             (f"; {len(flat)} flat word(s)" if flat else "")
+        RasterUnit.spec(**self.params)       # its checks (a knob's setting) now, not at build
         return self
 
     @property
