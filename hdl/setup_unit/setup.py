@@ -398,16 +398,21 @@ class Setup:
         (eq 22). A linear channel (a = b = c = 0) needs only P0 = d au + e av."""
         w, n = self.w, f"c{ch}"
         op = lambda x: x.as_signed()[:OPERAND].as_signed()
+        # P0 and 2A as the stepper keeps them, modulo 2**(FI + 9) (its sums wrap there)
+        acc = lambda x: x[:w.FI + 9].as_signed()
+        zero = Const(0, 1)
+        if linear:                     # a = b = c = 0: constants, nothing stored or carried
+            coef = {k: coef[k] for k in "def"}
         c = sc.lets(**{f"{n}_{k}": op(val >> (w.FC - w.FO)) for k, val in coef.items()})
-        a, b, cc, d, e = (c[f"{n}_{k}"] for k in "abcde")
+        d, e = c[f"{n}_d"], c[f"{n}_e"]
         au, av = alpha["au"], alpha["av"]
         FP = w.FO + w.FA                                     # fraction bits of a product
         if linear:
-            zero = Const(0, 1)
-            p0 = sc.let(f"{n}_p0", (sc.mul(f"{n}_dau", d, au) + sc.mul(f"{n}_eav", e, av))
-                        >> (FP - w.FI))
-            return {**{k: c[f"{n}_{k}"] for k in "abcdef"}, "pu": zero, "pv": zero, "p0": p0,
-                    "a2": zero}
+            p0 = sc.let(f"{n}_p0", acc((sc.mul(f"{n}_dau", d, au)
+                                        + sc.mul(f"{n}_eav", e, av)) >> (FP - w.FI)))
+            return {"a": zero, "b": zero, "c": zero, "d": d, "e": e, "f": c[f"{n}_f"],
+                    "pu": zero, "pv": zero, "p0": p0, "a2": zero}
+        a, b, cc = (c[f"{n}_{k}"] for k in "abc")
         aau, cav, bav = (sc.mul(f"{n}_{k}", x, y) for k, x, y in
                          (("aau", a, au), ("cav", cc, av), ("bav", b, av)))
         cau, dau, eav = (sc.mul(f"{n}_{k}", x, y) for k, x, y in
@@ -418,6 +423,6 @@ class Setup:
         a2 = sc.let(f"{n}_a2", (sc.mul(f"{n}_ut", au, t[f"{n}_t"])
                                 + sc.mul(f"{n}_vb", av, t[f"{n}_bv"])) >> (FP - w.FI - 1))
         de = sc.let(f"{n}_de", (dau + eav) >> (FP - w.FI))
-        p0 = sc.let(f"{n}_p0", de + (a2 >> 1))
+        p0 = sc.let(f"{n}_p0", acc(de + (a2 >> 1)))
         return {**{k: c[f"{n}_{k}"] for k in "abcdef"}, "pu": t[f"{n}_pu"],
-                "pv": t[f"{n}_pv"], "p0": p0, "a2": a2}
+                "pv": t[f"{n}_pv"], "p0": p0, "a2": acc(a2)}
