@@ -25,7 +25,8 @@ from ..setup_unit.formats import (MODES, flat_fields, fragment_fields, parse_gro
                                    parse_modes, triangle_fields)
 from ..setup_unit.setup import Setup
 from ..unit import Unit
-from .span import Link, row_engine, row_queue, setup_queue, stepper, walker
+from .span import (Link, row_engine, row_queue, setup_queue, stepper, walker,
+                   walker_constants)
 
 __all__ = ["Raster"]
 
@@ -132,16 +133,21 @@ class Raster(Unit):
             coef = setup.program(sc, v)
             coef.update({k: v[k] for k in flat})
             sq_take = Signal()
-            coef, sq_valid, done_n, held, end = setup_queue(m, sc, coef, space, sq_take)
+            current = walker_constants(ch, flat)
+            coef, sq_valid, done_n, held, end = setup_queue(m, sc, coef, space, sq_take,
+                                                            current)
+            current = {k: coef[k] for k in current}
             sc.finish()
             sc.check()
             m.d.comb += sq_take.eq(src_ready & sq_valid)
             pending = held.any()
         else:
             coef, done_n, pending, end = self._one_at_a_time(m, sc, inputs, src_ready, flat)
+            current = None
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
-        rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat)
+        rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat,
+                               current)
         rows, re, re_valid = row_engine(m, w, setup.modes, rows, rows_in, space, platform, flat,
                                         self.params["row_mults"] or ch + 1)
         rows, queued, take = row_queue(m, rows, re_valid, re.start, space)

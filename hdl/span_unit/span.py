@@ -28,7 +28,7 @@ from amaranth.lib.memory import Memory
 from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule
 from ..setup_unit.formats import VALUE
 
-__all__ = ["Link", "walker", "row_engine", "row_products", "row_queue", "setup_queue", "stepper"]
+__all__ = ["Link", "walker", "walker_constants", "row_engine", "row_products", "row_queue", "setup_queue", "stepper"]
 
 
 class Link:
@@ -46,17 +46,26 @@ def _step(i, r, q, d, n):
     return i + q + carry, Mux(carry, r + n, r - d)
 
 
-def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, flat=()):
+def walker_constants(channels, flat=()):
+    """The triangle's values the walker holds for its rows, unchanged while it walks."""
+    return ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels)
+                                        for k in ("a", "b", "c", "d", "e", "f", "pu", "pv",
+                                                  "p0", "a2")]
+
+
+def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, flat=(),
+           current=None):
     """Rows from triangles. ``src``: the setup's values; returns the row values (the edges'
     columns ``xl``, ``xr`` of row ``j``, unclamped, the numerator tracks of the left edge's
     first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left).
-    ``src_valid_next``: the setup's valid in the next clock (the walker registers its load)."""
+    ``src_valid_next``: the setup's valid in the next clock (the walker registers its load).
+    ``current``: the triangle's constants (``walker_constants``) as the setup queue holds
+    them for the triangle walked, read in place; without it the walker holds them."""
     j = Signal(w.wrow)
     to_j1, to_jm = (Signal(signed(w.wrow + 1), name=f"w_{k}") for k in ("to_j1", "to_jm"))
     left_long = Signal()
-    keep = ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels)
-                                  for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")]
-    held = {k: Signal.like(src[k], name=f"w_{k}") for k in keep}
+    keep = [] if current else walker_constants(channels, flat)
+    held = current or {k: Signal.like(src[k], name=f"w_{k}") for k in keep}
     edge = {}
     for e in ("l", "s", "t"):
         edge[e] = {k: Signal.like(src[f"{e}_{k}"], name=f"w_{e}_{k}") for k in "iqdn"}
@@ -281,7 +290,7 @@ def _fields(data, like):
     return out
 
 
-def setup_queue(m, sc, values, space, take, depth=16):
+def setup_queue(m, sc, values, space, take, current=(), depth=15):
     """The setup's results, a triangle's a slot of distributed RAM, between an overlapped
     setup (``sc``, a schedule with an interval) and the walker, with credits: the setup
     starts a triangle only while ``space`` (a register) promises a slot, so it never stalls.
@@ -289,21 +298,24 @@ def setup_queue(m, sc, values, space, take, depth=16):
     copies); each value is written as soon as it is ready, into one of a few memories that
     each take the values ready within an interval of each other, so no value is kept in a
     copy for this. Returns ``(values, valid, valid_next, held, offset)``, ``offset`` the one
-    at which the last memory is written; the caller drives ``take`` (only while valid)."""
+    at which the last memory is written; the caller drives ``take`` (only while valid).
+    ``current``: names of values read at the slot last taken, for as long as it is the last
+    (the walker's constants, read in place while it walks that triangle): that slot stays
+    out of use until the next is taken, so ``depth`` is 15 of the 16."""
     slots = Signal(4, name="sq_slots")                   # 4-bit pointers wrap at 16
     m.d.sync += slots.eq(slots + sc.start)
     slot = sc.input("sq_slot", slots)
     keep = {k: x for k, x in values.items() if not isinstance(x, Const)}
     groups = []
-    for k in sorted(keep, key=lambda k: sc._when(keep[k])):
+    for k in sorted(keep, key=lambda k: (k in current, sc._when(keep[k]))):
         at = sc._when(keep[k])
-        if not groups or at >= groups[-1][0] + sc.ii:
-            groups.append([at, {}])
+        if not groups or k in current and not groups[-1][2] or at >= groups[-1][0] + sc.ii:
+            groups.append([at, {}, k in current])
         groups[-1][1][k] = keep[k]
-    rptr = Signal(4, name="sq_rptr")
+    rptr, cur = Signal(4, name="sq_rptr"), Signal(4, name="sq_cur")
     out = {k: x for k, x in values.items() if isinstance(x, Const)}
     offset = 0
-    for g, (_, vals) in enumerate(groups):
+    for g, (_, vals, now) in enumerate(groups):
         at = max(sc._when(x) for x in vals.values())
         offset = max(offset, at)
         mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
@@ -312,10 +324,11 @@ def setup_queue(m, sc, values, space, take, depth=16):
         data = sc._late_at(Cat(*vals.values()), at)
         sc._read(at, data)
         m.d.comb += [wr.addr.eq(sc.late(slot, at)), wr.data.eq(data), wr.en.eq(sc.at(at)),
-                     rd.addr.eq(rptr)]
+                     rd.addr.eq(cur if now else rptr)]
         out.update(_fields(rd.data, vals))
     valid, valid_next, held = credits(m, "sq", sc.start, sc.at(offset), take, space, depth)
-    m.d.sync += rptr.eq(rptr + take)
+    with m.If(take):
+        m.d.sync += [rptr.eq(rptr + 1), cur.eq(rptr)]
     return out, valid, valid_next, held, offset
 
 
