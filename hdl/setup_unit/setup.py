@@ -366,11 +366,15 @@ class Setup:
                     "f": I1 << up}
         sums = sc.lets(**{f"{n}_s12": I1 + I2, f"{n}_s13": I1 + I3, f"{n}_s23": I2 + I3})
         if mode == "xshading":                                        # seed 001 eq 32
+            # I2 - I1, I3 - I1 and a + b registered ahead, so that d, e, c are one
+            # subtraction each once their last product is ready (two in series: 116 MHz)
+            diff = sc.lets(**{f"{n}_d21": I2 - I1, f"{n}_d31": I3 - I1})
             a = sc.mul(f"{n}_a", sums[f"{n}_s12"], v[f"e12{sfx}"])
             b = sc.mul(f"{n}_b", sums[f"{n}_s13"], v[f"e13{sfx}"])
-            c = a + b - sc.mul(f"{n}_c3", sums[f"{n}_s23"], v[f"e23{sfx}"])
-            return {"a": a, "b": b, "c": c, "d": ((I2 - I1) << up) - a,
-                    "e": ((I3 - I1) << up) - b, "f": I1 << up}
+            ab = sc.let(f"{n}_ab", a + b)
+            c = ab - sc.mul(f"{n}_c3", sums[f"{n}_s23"], v[f"e23{sfx}"])
+            return {"a": a, "b": b, "c": c, "d": (diff[f"{n}_d21"] << up) - a,
+                    "e": (diff[f"{n}_d31"] << up) - b, "f": I1 << up}
         lo, hi = VALUE.min << up, VALUE.max << up                       # exact: eq 4-6, 16
         shift = VALUE.frac_bits + G_FRAC - 3 - w.FC
 
