@@ -148,9 +148,9 @@ class Raster(Unit):
         culled = Signal(32)
         rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat,
                                current)
-        rows, re, re_valid = row_engine(m, w, setup.modes, rows, rows_in, space, platform, flat,
-                                        self.params["row_mults"] or ch + 1)
-        rows, queued, take = row_queue(m, rows, re_valid, re.start, space)
+        rows, early, re, re_valid = row_engine(m, w, setup.modes, rows, rows_in, space,
+                                               platform, flat, self.params["row_mults"] or ch + 1)
+        rows, queued, take = row_queue(m, rows, re_valid, re.start, space, early)
         cur = stepper(m, w, ch, rows, queued, take, self.o, flat)
         busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | pending
                 | re.busy())

@@ -168,7 +168,8 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     d = P0 + Pu u + Pv v: seven products, two for a linear channel (a = b = c = 0, so
     Phi = f + u d + v e and d = P0). The engine never stalls: a row starts only when
     ``space`` (a register of the row queue) promises a place for it. Returns the row values
-    for the stepper, the schedule and the output's valid bit."""
+    for the stepper (computed, and ``early``: what the engine only carries, which the row
+    queue takes at the row's start), the schedule and the output's valid bit."""
     channels = len(modes)
     mults = mults or channels + 1
     ii = -(-row_products(modes) // mults)
@@ -176,9 +177,18 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
                  row_link.ready.eq(sc.aligned & space)]
+    # what passes through unchanged (the row, the triangle's index and flat words, 2A, a
+    # linear channel's d = P0) goes to the row queue as the row starts, not through a copy
+    # for each row in flight (over the engine's length, 6 copies of each 2A at the default)
+    early = {k: rows[k] for k in ("j", "tri", *flat)}
+    early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] for ch in range(channels)})
+    early.update({f"d{ch}": rows[f"c{ch}_p0"] for ch, mode in enumerate(modes)
+                  if mode == "linear"})
+    carried = {"j", "tri", *flat, *(f"c{ch}_a2" for ch in range(channels)),
+               *(f"c{ch}_p0" for ch, mode in enumerate(modes) if mode == "linear")}
     # the inputs are captured at every slot a job may start in (``aligned``, not the start:
     # safe, since no job reads an input more than ``ii`` clocks after its start), from copies
-    v = sc.inputs(rows, copy=sc.aligned_copy)
+    v = sc.inputs({k: x for k, x in rows.items() if k not in carried}, copy=sc.aligned_copy)
     size = 1 << w.screen_bits
     clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
     border = v["xl"] < 0                          # the span starts at column 0: its track
@@ -192,7 +202,7 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     FP = w.FO + w.FQ                                     # fraction bits of coefficient x u
     out = {}
     for ch, mode in enumerate(modes):
-        c = {k: v[f"c{ch}_{k}"] for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")}
+        c = {k: v.get(f"c{ch}_{k}") for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")}
         if mode == "linear":           # t1 = d, t2 = e at FT fraction bits: a shift, no sum
             t1, t2 = (c[k] >> (w.FO - w.FT) for k in "de")
         else:
@@ -207,16 +217,14 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
         ut, vt = sc.mul(f"ut{ch}", u, t1), sc.mul(f"vt{ch}", vv, t2)
         shift = w.FQ + w.FT - w.FI
         uvt = sc.let(f"uvt{ch}", (ut + vt) >> shift)
-        if mode == "linear":
+        if mode == "linear":          # d = P0: carried (``early``)
             k = sc._when(uvt)
-            out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0: p0, c["p0"], after=k)
         else:
             puv = sc.let(f"puv{ch}", (pu + pv) >> (FP - w.FI))
             k = sc._when(uvt, puv)
             out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0, x: p0 + x, c["p0"], puv, after=k)
         out[f"phi{ch}"] = sc.apply(f"phi{ch}", lambda f, x: (f << (w.FI - w.FO)) + x,
                                    c["f"], uvt, after=k)
-        out[f"c{ch}_a2"] = c["a2"]
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
     # the outputs registered; what the stepper would otherwise compute from the queue's
     # RAM on its way into a register is computed here: the rounding half in Phi, and the
@@ -224,7 +232,7 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     half = 1 << (w.FI - VALUE.frac_bits - 1)
     fns = {k: (lambda r: r, x) for k, x in out.items()}
     fns.update({f"phi{ch}": (lambda r: r + half, out[f"phi{ch}"]) for ch in range(channels)})
-    fns.update({k: (lambda r: r, v[k]) for k in ("j", "xs", "xe", "tri", *flat)})
+    fns.update({k: (lambda r: r, v[k]) for k in ("xs", "xe")})
     fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
     fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
     out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
@@ -232,7 +240,7 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     m.d.sync += out_valid.eq(sc.at(end))
     sc.finish()
     sc.check()
-    return out, sc, out_valid
+    return out, early, sc, out_valid
 
 
 def row_products(modes):
@@ -241,26 +249,33 @@ def row_products(modes):
     return 2 + sum(2 if mode == "linear" else 7 for mode in modes)
 
 
-def row_queue(m, rows, valid, started, space, depth=8):
+def row_queue(m, rows, valid, started, space, early, depth=8):
     """A queue of ``depth`` rows (distributed RAM, 16 deep at no extra cost) between the row
     engine and the stepper, with credits: ``space`` (registered) is high while fewer than
     ``depth`` rows are started and not yet taken, so a started row always finds a place and
     the row engine needs no enable. No combinational path runs from the fragment stream's
     ready back into the row engine and the walker. Its valid is a register (``level`` next
-    != 0), so the stepper's load enable is one LUT from registers. Returns
-    ``(rows, valid, take)``; the caller drives ``take`` (only while valid)."""
-    names = list(rows)
-    width = sum(len(rows[k]) for k in names)
-    mem = Memory(shape=unsigned(width), depth=16, init=[])      # 4-bit pointers wrap
-    m.submodules.row_queue = mem
-    wr, rd = mem.write_port(), mem.read_port(domain="comb")
-    wptr, rptr = Signal(4, name="rq_wptr"), Signal(4, name="rq_rptr")
+    != 0), so the stepper's load enable is one LUT from registers. ``early``: a row's values
+    the engine only carries, written into a memory of their own as it starts; the engine
+    never stalls and keeps the rows' order, so the k-th start is the k-th row out and both
+    memories are read at one pointer (at most ``depth`` < 16 rows started and not taken: no
+    slot is written again before it is read). Returns ``(rows, valid, take)``; the caller
+    drives ``take`` (only while valid)."""
     take = Signal(name="rq_take")
+    rptr = Signal(4, name="rq_rptr")
     nonempty, _, _ = credits(m, "rq", started, valid, take, space, depth)
-    m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*(rows[k] for k in names))),
-                 wr.en.eq(valid), rd.addr.eq(rptr)]
-    m.d.sync += [wptr.eq(wptr + valid), rptr.eq(rptr + take)]
-    return _fields(rd.data, rows), nonempty, take
+    out = {}
+    for name, vals, en in (("row_queue", rows, valid), ("row_queue_early", early, started)):
+        mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
+        m.submodules[name] = mem                                  # 4-bit pointers wrap
+        wr, rd = mem.write_port(), mem.read_port(domain="comb")
+        wptr = Signal(4, name=f"{name}_wptr")
+        m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*vals.values())), wr.en.eq(en),
+                     rd.addr.eq(rptr)]
+        m.d.sync += wptr.eq(wptr + en)
+        out.update(_fields(rd.data, vals))
+    m.d.sync += rptr.eq(rptr + take)
+    return out, nonempty, take
 
 
 def credits(m, name, started, written, take, space, depth):
