@@ -186,6 +186,28 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
                   if mode == "linear"})
     carried = {"j", "tri", *flat, *(f"c{ch}_a2" for ch in range(channels)),
                *(f"c{ch}_p0" for ch, mode in enumerate(modes) if mode == "linear")}
+    # what is read only at the end, f and a quadratic channel's P0: a memory per channel
+    # written as the row starts, read at the offset of that end at the row's slot (a copy of
+    # 4 bits, not of the 51-61 the values take; at most ceil(length / ii) < 16 rows in
+    # flight, so no slot is written again before its row's read)
+    ends = {ch: (f"c{ch}_f",) if mode == "linear" else (f"c{ch}_f", f"c{ch}_p0")
+            for ch, mode in enumerate(modes)}
+    carried.update(k for names in ends.values() for k in names)
+    wptr = Signal(4, name="re_cptr")
+    m.d.sync += wptr.eq(wptr + sc.start)
+    slot = sc.input("cslot", wptr)
+
+    def read_at(ch, k):
+        """Channel ``ch``'s end values as the row at offset ``k`` wrote them."""
+        vals = {n: rows[n] for n in ends[ch]}
+        mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
+        m.submodules[f"row_ends{ch}"] = mem
+        wr, rd = mem.write_port(), mem.read_port(domain="comb")
+        addr = sc.late(slot, k)
+        sc._read(k, addr)
+        m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*vals.values())), wr.en.eq(sc.start),
+                     rd.addr.eq(addr)]
+        return {n[len(f"c{ch}_"):]: x for n, x in _fields(rd.data, vals).items()}
     # the inputs are captured at every slot a job may start in (``aligned``, not the start:
     # safe, since no job reads an input more than ``ii`` clocks after its start), from copies
     v = sc.inputs({k: x for k, x in rows.items() if k not in carried}, copy=sc.aligned_copy)
@@ -219,12 +241,13 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
         uvt = sc.let(f"uvt{ch}", (ut + vt) >> shift)
         if mode == "linear":          # d = P0: carried (``early``)
             k = sc._when(uvt)
+            end_vals = read_at(ch, k)
         else:
             puv = sc.let(f"puv{ch}", (pu + pv) >> (FP - w.FI))
             k = sc._when(uvt, puv)
-            out[f"d{ch}"] = sc.apply(f"d{ch}", lambda p0, x: p0 + x, c["p0"], puv, after=k)
-        out[f"phi{ch}"] = sc.apply(f"phi{ch}", lambda f, x: (f << (w.FI - w.FO)) + x,
-                                   c["f"], uvt, after=k)
+            end_vals = read_at(ch, k)
+            out[f"d{ch}"] = sc.let(f"d{ch}", end_vals["p0"] + puv, after=k)
+        out[f"phi{ch}"] = sc.let(f"phi{ch}", (end_vals["f"] << (w.FI - w.FO)) + uvt, after=k)
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
     # the outputs registered; what the stepper would otherwise compute from the queue's
     # RAM on its way into a register is computed here: the rounding half in Phi, and the
