@@ -63,7 +63,8 @@ fpga: setup
 	$(PY) -m sim.fpga --seeds $(SEEDS) $(if $(UNIT),--units $(UNIT))
 
 # The stream contract proven by SymbiYosys (yowasp-sby, yices): every unit and a pipeline per
-# method and bump method, bounded model checks and covers, and the mutants each property must
+# method and bump method: the one-row units by k-induction, the raster and the pipelines by
+# bounded model checks; covers, and the mutants each property must
 # catch: build/formal/formal.{md,json}. make formal [ONLY=raster,scene_linear] [TIMEOUT=s]
 ONLY    ?=
 TIMEOUT ?=
