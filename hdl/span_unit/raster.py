@@ -25,8 +25,8 @@ from ..setup_unit.formats import (MODES, flat_fields, fragment_fields, parse_gro
                                    parse_modes, triangle_fields)
 from ..setup_unit.setup import Setup
 from ..unit import Unit
-from .span import (Link, row_engine, row_queue, setup_queue, stepper, walker,
-                   walker_constants)
+from .span import (Link, row_engine, row_engine_serial, row_queue, setup_queue, stepper,
+                   walker, walker_constants)
 
 __all__ = ["Raster"]
 
@@ -37,7 +37,8 @@ class Raster(Unit):
            "forward-difference span engine; many fragments per triangle")
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
               "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0,
-              "setup_mults": 1, "row_mults": 0, "setup_ii": 0, "setup_narrow": 0}
+              "setup_mults": 1, "row_mults": 0, "setup_ii": 0, "setup_narrow": 0,
+              "row_serial": 0}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "groups": None,     # a string: parse_groups checks it
@@ -45,13 +46,17 @@ class Raster(Unit):
               "setup_mults": (1, 6),     # the setup's multipliers (35 x 35, four MULT18X18D each)
               "row_mults": (0, 13),      # the row engine's; 0: one per channel and one more
               "setup_ii": (0, 255),      # clocks between triangles in the setup; 0: one at a time
-              "setup_narrow": (0, 6)}    # the setup's 18 x 18 multipliers (one MULT18X18D each)
+              "setup_narrow": (0, 6),    # the setup's 18 x 18 multipliers (one MULT18X18D each)
+              "row_serial": (0, 9)}      # >0: the row engine's channels in turn on this many
     PER_CHANNEL = ("modes", "groups")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups,
-                 flat, setup_mults, row_mults, setup_ii, setup_narrow):
+                 flat, setup_mults, row_mults, setup_ii, setup_narrow, row_serial):
         parse_modes(modes, channels)
+        if row_serial and row_mults:
+            raise ValueError(f"row_mults={row_mults} and row_serial={row_serial}: the row "
+                             f"engine is one or the other (row_mults=0 with row_serial)")
         self.groups = max(parse_groups(groups, channels)) + 1
         if row_mults > channels + 1:          # sharing only: ii stays at or above the default's
             raise ValueError(f"row_mults must be at most channels + 1 = {channels + 1} (0: "
@@ -148,14 +153,24 @@ class Raster(Unit):
         culled = Signal(32)
         rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat,
                                current)
-        rows, early, re, re_valid = row_engine(m, w, setup.modes, rows, rows_in, space,
-                                               platform, flat, self.params["row_mults"] or ch + 1)
-        rows, queued, take = row_queue(m, rows, re_valid, re.start, space, early)
+        if self.params["row_serial"]:
+            writes, started, written, re = row_engine_serial(
+                m, w, setup.modes, rows, rows_in, space, platform, flat,
+                self.params["row_serial"])
+            re_ii, re_length, re_busy = re["ii"], re["length"], re["busy"]
+        else:
+            rows, early, re, written = row_engine(m, w, setup.modes, rows, rows_in, space,
+                                                  platform, flat,
+                                                  self.params["row_mults"] or ch + 1)
+            writes = [("row_queue", rows, written, None), ("row_queue_early", early, re.start,
+                                                          None)]
+            started, re_ii, re_length, re_busy = re.start, re.ii, re.length, re.busy()
+        rows, queued, take = row_queue(m, writes, started, written, space)
         cur = stepper(m, w, ch, rows, queued, take, self.o, flat)
-        busy = (cur | self.o.valid | walking | rows_in.valid | re_valid | queued | pending
-                | re.busy())
+        busy = (cur | self.o.valid | walking | rows_in.valid | written | queued | pending
+                | re_busy)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
-        self._timing = (ii or sc.length, re.ii, re.length, end)
+        self._timing = (ii or sc.length, re_ii, re_length, end)
         return m
 
     def _one_at_a_time(self, m, sc, inputs, src_ready, flat):

@@ -25,10 +25,10 @@ Four parts, each a stream stage with backpressure:
 from amaranth.hdl import Cat, Const, Mux, Signal, signed, unsigned
 from amaranth.lib.memory import Memory
 
-from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule
+from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule, _or_tree
 from ..setup_unit.formats import VALUE
 
-__all__ = ["Link", "walker", "walker_constants", "row_engine", "row_products", "row_queue", "setup_queue", "stepper"]
+__all__ = ["Link", "walker", "walker_constants", "row_engine", "row_engine_serial", "row_products", "row_queue", "setup_queue", "stepper"]
 
 
 class Link:
@@ -266,36 +266,123 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     return out, early, sc, out_valid
 
 
+def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=3):
+    """The row engine with its channels in turn: one datapath, on ``mults`` shared
+    multipliers, evaluates one channel of one row per job, a job every ``ii`` clocks, so a
+    further channel costs clocks per row (``ii`` each) and a share of the operand
+    multiplexer, not multipliers or registers of its own. A job computes what
+    :func:`row_engine` computes for one channel, in the same formats and order (u, v, then
+    Phi and d, eq 17-20; a linear channel's zero a, b, c, Pu, Pv make the same sums), so the
+    fragments are the same. Each job captures its inputs at its start (the row's values and
+    its channel's constants, picked by a one-hot channel register) and recomputes u and v
+    (nine products, four with no quadratic channel); the walker's row is taken at the last
+    channel's start, so it and the triangle's constants stay steady while the jobs read
+    them. Returns the writes into the row queue (``(name, values, enable, slot)``), the
+    first job's start (the queue's credit), the last job's write, and the timing."""
+    channels = len(modes)
+    quad = any(mode != "linear" for mode in modes)
+    ii = -(-(9 if quad else 4) // mults)
+    sc = Schedule(m, "rs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
+    sel = [Signal(name=f"rs_sel{c}", init=c == 0) for c in range(channels)]   # next job's
+    under = ~sel[0]                            # a row's jobs are under way
+    slot = Signal(4, name="rs_slot")           # the row's place in the row queue (4 bits wrap)
+    m.d.comb += [sc.start.eq(sc.aligned & (under | (row_link.valid & space))),
+                 row_link.ready.eq(sc.aligned & sel[-1] & (under | space))]
+    with m.If(sc.start):
+        m.d.sync += [sel[c].eq(sel[c - 1]) for c in range(channels)]
+        with m.If(sel[-1]):
+            m.d.sync += slot.eq(slot + 1)
+    started = Signal(name="rs_started")
+    m.d.comb += started.eq(sc.start & sel[0])
+    keys = ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")
+    pick = {k: _or_tree([Mux(sel[c], rows[f"c{c}_{k}"], 0) for c in range(channels)])
+            for k in keys}
+    row_keys = ("xl", "xr", "E_u", "E_v", "B_u", "B_v", "rs", "sh")
+    v = sc.inputs({**{k: rows[k] for k in row_keys}, **pick, "slot": slot, "sel": Cat(*sel)},
+                  copy=sc.aligned_copy)
+    size = 1 << w.screen_bits
+    clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
+    border = v["xl"] < 0
+    num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
+           for a in "uv"}
+    v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), **num))
+    sc.shift = (v["sh"], w.FQ - w.R)
+    fq = lambda x: x[:OPERAND].as_signed()
+    u = sc.mul("u", v["nu"], v["rs"], post=fq, shifted=True)
+    vv = sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True)
+    FP = w.FO + w.FQ
+    t1, t2 = (v[k] >> (w.FO - w.FT) for k in "de")
+    if quad:
+        au, cv, bv = sc.mul("au", v["a"], u), sc.mul("cv", v["c"], vv), sc.mul("bv", v["b"], vv)
+        pu, pv = sc.mul("pu", v["pu"], u), sc.mul("pv", v["pv"], vv)
+        acv = sc.let("acv", au + cv)
+        t1 = sc.apply("t1", lambda d, x: fq(((d << w.FQ) + x) >> (FP - w.FT)), v["d"], acv)
+        t2 = sc.apply("t2", lambda e, x: fq(((e << w.FQ) + x) >> (FP - w.FT)), v["e"], bv)
+    ut, vt = sc.mul("ut", u, t1), sc.mul("vt", vv, t2)
+    uvt = sc.let("uvt", (ut + vt) >> (w.FQ + w.FT - w.FI))
+    d = (sc.apply("d", lambda p0, x: p0 + x, v["p0"], sc.let("puv", (pu + pv) >> (FP - w.FI)))
+         if quad else v["p0"])
+    phi = sc.apply("phi", lambda f, x: (f << (w.FI - w.FO)) + x, v["f"], uvt)
+    end = sc._when(phi, d)
+    half = 1 << (w.FI - VALUE.frac_bits - 1)
+    fns = {"phi": (lambda r: r + half, phi), "d": (lambda r: r, d),
+           "xs": (lambda r: r, v["xs"]), "xe": (lambda r: r, v["xe"]),
+           "some": (lambda a, b: a < b, v["xs"], v["xe"]),
+           "one": (lambda a, b: a + 1 == b, v["xs"], v["xe"])}
+    out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
+    sc.outputs.update(out.values())
+    at = end + 1                               # the outputs' registers are valid
+    addr, chan = sc.late(v["slot"], at), sc.late(v["sel"], at)
+    sc._read(at, addr, chan)
+    en = sc.at(at)
+    writes = [(f"row_queue_c{c}", {f"phi{c}": out["phi"], f"d{c}": out["d"]}, en & chan[c],
+               addr) for c in range(channels)]
+    last = Signal(name="rs_written")
+    m.d.comb += last.eq(en & chan[-1])
+    writes.append(("row_queue", {k: out[k] for k in ("xs", "xe", "some", "one")}, last, addr))
+    early = {k: rows[k] for k in ("j", "tri", *flat)}
+    early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] for ch in range(channels)})
+    writes.append(("row_queue_early", early, started, slot))
+    sc.finish()
+    sc.check()
+    busy = Signal(name="rs_busy")
+    m.d.comb += busy.eq(sc.busy() | under)
+    timing = {"ii": channels * ii, "length": (channels - 1) * ii + at, "busy": busy}
+    return writes, started, last, timing
+
+
 def row_products(modes):
     """The row engine's products per row: u and v, then seven per quadratic channel and two
     per linear one."""
     return 2 + sum(2 if mode == "linear" else 7 for mode in modes)
 
 
-def row_queue(m, rows, valid, started, space, early, depth=8):
+def row_queue(m, writes, started, written, space, depth=8):
     """A queue of ``depth`` rows (distributed RAM, 16 deep at no extra cost) between the row
     engine and the stepper, with credits: ``space`` (registered) is high while fewer than
     ``depth`` rows are started and not yet taken, so a started row always finds a place and
     the row engine needs no enable. No combinational path runs from the fragment stream's
     ready back into the row engine and the walker. Its valid is a register (``level`` next
-    != 0), so the stepper's load enable is one LUT from registers. ``early``: a row's values
-    the engine only carries, written into a memory of their own as it starts; the engine
-    never stalls and keeps the rows' order, so the k-th start is the k-th row out and both
-    memories are read at one pointer (at most ``depth`` < 16 rows started and not taken: no
-    slot is written again before it is read). Returns ``(rows, valid, take)``; the caller
-    drives ``take`` (only while valid)."""
+    != 0), so the stepper's load enable is one LUT from registers. ``writes``: memories of
+    ``(name, values, enable, slot)``, each written at its row's slot (``slot`` None: its own
+    count of writes); the engine never stalls and keeps the rows' order, so the k-th start
+    is the k-th row out and every memory is read at one pointer (at most ``depth`` < 16 rows
+    started and not taken: no slot is written again before it is read). ``written``: a
+    row's last write. Returns ``(rows, valid, take)``; the caller drives ``take`` (only
+    while valid)."""
     take = Signal(name="rq_take")
     rptr = Signal(4, name="rq_rptr")
-    nonempty, _, _ = credits(m, "rq", started, valid, take, space, depth)
+    nonempty, _, _ = credits(m, "rq", started, written, take, space, depth)
     out = {}
-    for name, vals, en in (("row_queue", rows, valid), ("row_queue_early", early, started)):
+    for name, vals, en, slot in writes:
         mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
         m.submodules[name] = mem                                  # 4-bit pointers wrap
         wr, rd = mem.write_port(), mem.read_port(domain="comb")
-        wptr = Signal(4, name=f"{name}_wptr")
-        m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*vals.values())), wr.en.eq(en),
+        if slot is None:
+            slot = Signal(4, name=f"{name}_wptr")
+            m.d.sync += slot.eq(slot + en)
+        m.d.comb += [wr.addr.eq(slot), wr.data.eq(Cat(*vals.values())), wr.en.eq(en),
                      rd.addr.eq(rptr)]
-        m.d.sync += wptr.eq(wptr + en)
         out.update(_fields(rd.data, vals))
     m.d.sync += rptr.eq(rptr + take)
     return out, nonempty, take
