@@ -122,6 +122,12 @@ def configurations(quick=False, knobs=None):
         rows.append(_row("row multipliers", "one per channel + 1" if n == 0 else str(n),
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
                          default=n == 0))
+    # the row engine's channels in turn on one datapath of n multipliers (a further channel
+    # costs clocks per row, not multipliers)
+    for n in (3, 5):
+        hw = {"row_serial": n}
+        rows.append(_row("row engine", f"channels in turn, {n} multipliers", raster(**hw),
+                         scene="default", hardware=hw, unit=unit_raster(**hw)))
     # the rotation: method (the exact one's CORDIC iterations), angle bits, table address bits
     for label, p, scene in (("paper", {}, "bump_angular"),
                             ("exact", {"method": "exact"}, "bump_angular_exact"),

@@ -286,7 +286,8 @@ def test_batch_trace_window(tmp_path):
     ("foo=1", "--raster: 'foo=1' is not KNOB=VALUE with a knob of setup_ii"),
     ("setup_ii=fast", "--raster: setup_ii must be a whole number, not 'fast'"),
     ("setup_narrow=9", "setup_narrow must be in 0..6"),
-    ("setup_ii=8", "setup_ii=8 is too short: the setup's 54 products")])
+    ("setup_ii=8", "setup_ii=8 is too short: the setup's 54 products"),
+    ("row_serial=2,row_mults=2", "row_mults=2 and row_serial=2: the row engine is one")])
 def test_render_raster_knobs_are_checked(arg, message, tmp_path):
     """``sim render --raster``: a wrong knob or setting is one line naming it, exit 2."""
     r = cli("sim", "render", "scenes/default.toml", "--out", str(tmp_path / "o"),

@@ -122,6 +122,28 @@ def test_multiplier_knobs_keep_the_contract():
     assert info["latency"] == unit.latency
 
 
+@pytest.mark.parametrize("mults,modes", [(3, "exact,xshading,linear"), (1, "linear,linear")])
+def test_channels_in_turn_keep_the_contract(mults, modes):
+    """``row_serial``: the row engine's channels one after another on one datapath (nine
+    products a job, u and v again in each: ceil(9 / 3) = 3 clocks a channel on three
+    multipliers; four a job with linear channels only, on one), the walker's row taken at
+    the last channel's start. The same fragments within the same bound under backpressure,
+    the row interval channels x that, and the latency its schedule states."""
+    params = {**SMALL, "channels": len(modes.split(",")), "modes": modes, "row_serial": mults}
+    unit = make_unit("raster", spec=True, **params)
+    assert unit.timing[1] == params["channels"] * -(-(9 if "x" in modes else 4) // mults)
+    p = unit.params
+    hard, labels = raster_hard_cases(**p)
+    extra = random_triangles(np.random.default_rng(11), 12, **p)
+    inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
+    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=0.6, seed=6)
+    check(inputs, out, p)
+    assert info["culled"] == raster.culled(inputs)
+    k = labels.index("whole screen")
+    _, info = stream("raster", {f: hard[f][k:k + 1] for f in hard}, "amaranth", params)
+    assert info["latency"] == unit.latency
+
+
 OVERLAPPED = [
     {"modes": "exact,xshading,linear", "setup_ii": 12, "setup_mults": 4, "setup_narrow": 3},
     {"modes": "linear,xshading,xshading", "setup_ii": 24, "setup_mults": 1, "setup_narrow": 2}]
@@ -248,6 +270,8 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
     ({"groups": "0,0,1"}, "groups names 3 channel(s) but channels=2"),
     ({"row_mults": 4}, "row_mults must be at most channels"),       # then: + 1 = 3
     ({"setup_mults": 0}, "setup_mults must be in 1..6"),
+    ({"row_mults": 2, "row_serial": 3}, "row_mults=2 and row_serial=3: the row engine is one"),
+    ({"row_serial": 10}, "row_serial must be in 0..9"),
     # 52 products: Omega 2, the edges' numerators 6, two Newton steps 4, the numerator
     # tracks 16, alpha 2, and 11 for each X-shading channel (a, b, c 3; Pu, Pv, P0, 2A 8)
     # of those, 30 fit 18 x 18: Omega 2, the edges' 6, the tracks' 16 and a, b, c 3 each
