@@ -211,16 +211,8 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     # the inputs are captured at every slot a job may start in (``aligned``, not the start:
     # safe, since no job reads an input more than ``ii`` clocks after its start), from copies
     v = sc.inputs({k: x for k, x in rows.items() if k not in carried}, copy=sc.aligned_copy)
-    size = 1 << w.screen_bits
-    clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
-    border = v["xl"] < 0                          # the span starts at column 0: its track
-    num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
-           for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
-    v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), **num))
-    sc.shift = (v["sh"], w.FQ - w.R)
+    u, vv = _uv(sc, w, v)
     fq = lambda x: x[:OPERAND].as_signed()
-    u = sc.mul("u", v["nu"], v["rs"], post=fq, shifted=True)
-    vv = sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True)
     FP = w.FO + w.FQ                                     # fraction bits of coefficient x u
     out = {}
     for ch, mode in enumerate(modes):
@@ -249,17 +241,7 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
             out[f"d{ch}"] = sc.let(f"d{ch}", end_vals["p0"] + puv, after=k)
         out[f"phi{ch}"] = sc.let(f"phi{ch}", (end_vals["f"] << (w.FI - w.FO)) + uvt, after=k)
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
-    # the outputs registered; what the stepper would otherwise compute from the queue's
-    # RAM on its way into a register is computed here: the rounding half in Phi, and the
-    # span's tests (empty, one pixel)
-    half = 1 << (w.FI - VALUE.frac_bits - 1)
-    fns = {k: (lambda r: r, x) for k, x in out.items()}
-    fns.update({f"phi{ch}": (lambda r: r + half, out[f"phi{ch}"]) for ch in range(channels)})
-    fns.update({k: (lambda r: r, v[k]) for k in ("xs", "xe")})
-    fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
-    fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
-    out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
-    sc.outputs.update(out.values())
+    out = _outputs(sc, w, v, out, [f"phi{ch}" for ch in range(channels)], end)
     m.d.sync += out_valid.eq(sc.at(end))
     sc.finish()
     sc.check()
@@ -278,7 +260,7 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     (nine products, four with no quadratic channel); the walker's row is taken at the last
     channel's start, so it and the triangle's constants stay steady while the jobs read
     them. Returns the writes into the row queue (``(name, values, enable, slot)``), the
-    first job's start (the queue's credit), the last job's write, and the timing."""
+    last job's start (the queue's credit), its write, and the timing."""
     channels = len(modes)
     quad = any(mode != "linear" for mode in modes)
     ii = -(-(9 if quad else 4) // mults)
@@ -292,24 +274,19 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
         m.d.sync += [sel[c].eq(sel[c - 1]) for c in range(channels)]
         with m.If(sel[-1]):
             m.d.sync += slot.eq(slot + 1)
+    # the row counts in the queue's credits from its last job's start, a start from
+    # registers (with more than one channel): the first job's check of ``space`` holds a
+    # place, as no other row starts before the last job and the queue only empties meanwhile
     started = Signal(name="rs_started")
-    m.d.comb += started.eq(sc.start & sel[0])
+    m.d.comb += started.eq(sc.start & sel[-1])
     keys = ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")
     pick = {k: _or_tree([Mux(sel[c], rows[f"c{c}_{k}"], 0) for c in range(channels)])
             for k in keys}
     row_keys = ("xl", "xr", "E_u", "E_v", "B_u", "B_v", "rs", "sh")
     v = sc.inputs({**{k: rows[k] for k in row_keys}, **pick, "slot": slot, "sel": Cat(*sel)},
                   copy=sc.aligned_copy)
-    size = 1 << w.screen_bits
-    clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
-    border = v["xl"] < 0
-    num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
-           for a in "uv"}
-    v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), **num))
-    sc.shift = (v["sh"], w.FQ - w.R)
+    u, vv = _uv(sc, w, v)
     fq = lambda x: x[:OPERAND].as_signed()
-    u = sc.mul("u", v["nu"], v["rs"], post=fq, shifted=True)
-    vv = sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True)
     FP = w.FO + w.FQ
     t1, t2 = (v[k] >> (w.FO - w.FT) for k in "de")
     if quad:
@@ -324,13 +301,7 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
          if quad else v["p0"])
     phi = sc.apply("phi", lambda f, x: (f << (w.FI - w.FO)) + x, v["f"], uvt)
     end = sc._when(phi, d)
-    half = 1 << (w.FI - VALUE.frac_bits - 1)
-    fns = {"phi": (lambda r: r + half, phi), "d": (lambda r: r, d),
-           "xs": (lambda r: r, v["xs"]), "xe": (lambda r: r, v["xe"]),
-           "some": (lambda a, b: a < b, v["xs"], v["xe"]),
-           "one": (lambda a, b: a + 1 == b, v["xs"], v["xe"])}
-    out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
-    sc.outputs.update(out.values())
+    out = _outputs(sc, w, v, {"phi": phi, "d": d}, ["phi"], end)
     at = end + 1                               # the outputs' registers are valid
     addr, chan = sc.late(v["slot"], at), sc.late(v["sel"], at)
     sc._read(at, addr, chan)
@@ -349,6 +320,36 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     m.d.comb += busy.eq(sc.busy() | under)
     timing = {"ii": channels * ii, "length": (channels - 1) * ii + at, "busy": busy}
     return writes, started, last, timing
+
+
+def _uv(sc, w, v):
+    """A row's start in a row-engine schedule: the span clamped to the screen (``xs``,
+    ``xe`` into ``v``), the numerator track it starts on (column 0 when the left edge is off
+    screen), and u = nu r / 2**sh, v likewise (eq 18-20). Returns (u, v)."""
+    size = 1 << w.screen_bits
+    clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
+    border = v["xl"] < 0                          # the span starts at column 0: its track
+    num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
+           for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
+    v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), **num))
+    sc.shift = (v["sh"], w.FQ - w.R)
+    fq = lambda x: x[:OPERAND].as_signed()
+    return (sc.mul("u", v["nu"], v["rs"], post=fq, shifted=True),
+            sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True))
+
+
+def _outputs(sc, w, v, vals, phis, end):
+    """The row engine's outputs registered at ``end``; what the stepper would otherwise
+    compute from the queue's RAM on its way into a register is computed here: the rounding
+    half in each of ``phis``, and the span's tests (empty, one pixel)."""
+    half = 1 << (w.FI - VALUE.frac_bits - 1)
+    fns = {k: ((lambda r: r + half) if k in phis else (lambda r: r), x) for k, x in vals.items()}
+    fns.update({k: (lambda r: r, v[k]) for k in ("xs", "xe")})
+    fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
+    fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
+    out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
+    sc.outputs.update(out.values())
+    return out
 
 
 def row_products(modes):
