@@ -110,15 +110,22 @@ def test_multiplier_knobs_keep_the_contract():
                                              if not k.endswith("_mults")})
     assert unit.timing[1] == 9 and base.timing[1] == 5
     assert unit.timing[0] < base.timing[0]
+    _keeps_the_contract(unit, params, 9, 0.7, 4)
+
+
+def _keeps_the_contract(unit, params, rng, p_ready, seed):
+    """The hard cases and 12 random triangles under backpressure: coverage, the 1-LSB bound,
+    the culled count; a whole-screen triangle's first fragment at the stated latency."""
     p = unit.params
-    hard, _ = raster_hard_cases(**p)
-    extra = random_triangles(np.random.default_rng(9), 12, **p)
+    hard, labels = raster_hard_cases(**p)
+    extra = random_triangles(np.random.default_rng(rng), 12, **p)
     inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
-    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=0.7, seed=4)
+    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=p_ready,
+                       seed=seed)
     check(inputs, out, p)
-    k = raster_hard_cases(**p)[1].index("whole screen")
-    one = {f: hard[f][k:k + 1] for f in hard}
-    _, info = stream("raster", one, "amaranth", params)
+    assert info["culled"] == raster.culled(inputs)
+    k = labels.index("whole screen")
+    _, info = stream("raster", {f: hard[f][k:k + 1] for f in hard}, "amaranth", params)
     assert info["latency"] == unit.latency
 
 
@@ -132,16 +139,7 @@ def test_channels_in_turn_keep_the_contract(mults, modes):
     params = {**SMALL, "channels": len(modes.split(",")), "modes": modes, "row_serial": mults}
     unit = make_unit("raster", spec=True, **params)
     assert unit.timing[1] == params["channels"] * -(-(9 if "x" in modes else 4) // mults)
-    p = unit.params
-    hard, labels = raster_hard_cases(**p)
-    extra = random_triangles(np.random.default_rng(11), 12, **p)
-    inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
-    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=0.6, seed=6)
-    check(inputs, out, p)
-    assert info["culled"] == raster.culled(inputs)
-    k = labels.index("whole screen")
-    _, info = stream("raster", {f: hard[f][k:k + 1] for f in hard}, "amaranth", params)
-    assert info["latency"] == unit.latency
+    _keeps_the_contract(unit, params, 11, 0.6, 6)
 
 
 OVERLAPPED = [
