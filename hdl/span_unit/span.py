@@ -278,7 +278,8 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     # registers (with more than one channel): the first job's check of ``space`` holds a
     # place, as no other row starts before the last job and the queue only empties meanwhile
     started = Signal(name="rs_started")
-    m.d.comb += started.eq(sc.start & sel[-1])
+    m.d.comb += started.eq(sc.aligned & sel[-1] if channels > 1 else sc.start)  # sel[-1]:
+    # under, so this is sc.start & sel[-1], written so that no path runs from the walker
     keys = ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")
     pick = {k: _or_tree([Mux(sel[c], rows[f"c{c}_{k}"], 0) for c in range(channels)])
             for k in keys}
