@@ -7,7 +7,10 @@ start pulse, so several jobs may be in flight. With ``ii``, jobs start only on e
 clock (``aligned``, a free-running count), the multipliers are reserved modulo ``ii``, and a
 register read more than ``ii`` offsets after it was written is read from a copy (``late``),
 so the next job never overwrites a value before its last read (:meth:`Schedule.check`);
-a division takes ``ceil((q_bits + 1) / ii)`` dividers in turn.
+a division takes ``ceil((q_bits + 1) / ii)`` dividers in turn. Without ``ii``, the copies of
+one multiplier's products share registers where their lives (write to last read) do not
+overlap (:meth:`Schedule._pool`): a copy is the product's sum register, so a shared one needs
+no multiplexer, only its write enables ORed.
 Everything advances with one enable, so a stalled schedule holds every value.
 
 A product: operands are registered (the DSP's input registers), the four 18 x 18 partial
@@ -60,6 +63,7 @@ class Schedule:
         self.fits = 0                                    # products a narrow one can take
         self.length = 1                                  # offsets used
         self.outputs = SignalSet()                       # read by the next stage, not here
+        self.pooled = []                                 # (register, value, offset): _pool
 
     def at(self, k):
         """The phase bit of offset ``k``: high while the job that started ``k`` clocks ago is
@@ -93,11 +97,14 @@ class Schedule:
                 if s in self.ready:
                     self.reads[s] = max(self.reads.get(s, 0), k)
 
-    def _write(self, name, value, k, shape=None, en=None):
+    def _write(self, name, value, k, shape=None, en=None, pool=False):
         value = Value.cast(value)
         reg = Signal(shape or value.shape(), name=f"{self.name}_{name}", reset_less=True)
-        with self.m.If(self.en & self.at(k) if en is None else en):
-            self.m.d.sync += reg.eq(value)
+        if pool and self.ii is None:                    # a register of its pool's: _pool
+            self.pooled.append((reg, value, k))
+        else:
+            with self.m.If(self.en & self.at(k) if en is None else en):
+                self.m.d.sync += reg.eq(value)
         self.ready[reg], self.written[reg] = k + 1, k
         self.length = max(self.length, k + 1)
         return reg
@@ -187,8 +194,9 @@ class Schedule:
             total, lat = self._shifted(idx, amount, k + self.lat), self.lat + 2
             self._read(k + self.lat, amount)
         self.length = max(self.length, k + lat + 1)
-        value = post(total) if post else total[:natural].as_signed()
-        return self._write(name, value, k + lat, shape)
+        if post:
+            return self._write(name, post(total), k + lat, shape, pool=True)
+        return self._write(name, total, k + lat, shape or signed(natural), pool=True)
 
     def _shifted(self, idx, amount, at):
         """Multiplier ``idx``'s shifter, reading ``amount`` at offset ``at`` (with ``ii``, its
@@ -364,11 +372,47 @@ class Schedule:
             with self.m.If(self.en):
                 self.m.d.sync += [count.eq(nxt), aligned.eq(~nxt.any() | idle)]  # no "== 0"
 
+    def keep(self, *values):
+        """The registers in ``values`` are read by the next stage, after the job: never
+        shared (call before :meth:`finish`)."""
+        for v in values:
+            self.outputs.update(_deps(v))
+
     def finish(self):
         if self.ii is not None:
             self._align()
         self._multipliers()
         self._build_shifters()
+        self._pool()
+
+    def _pool(self):
+        """The product copies' registers (one job at a time): those of one value (the same
+        multiplier's sum, the same ``post``) share a physical register where their lives do
+        not overlap. A copy written at offset w and last read at r holds (w, r]; the next
+        may be written at r or later. Left-edge allocation (fewest registers, optimal for
+        intervals); a copy that is never read here, or is an output, keeps its own."""
+        pools = {}
+        for reg, value, w in self.pooled:
+            r = None if reg in self.outputs else self.reads.get(reg)
+            pools.setdefault(_key(value), (value, []))[1].append((w, r, reg))
+        self.shared = 0                                  # registers saved (for reports)
+        for value, regs in pools.values():
+            phys = []                                    # [free from, members]
+            for w, r, reg in sorted(regs, key=lambda x: x[0]):
+                slot = next((p for p in phys if r is not None and p[0] is not None
+                             and p[0] <= w), None)
+                if slot is None:
+                    slot = [None, []]
+                    phys.append(slot)
+                slot[0] = r
+                slot[1].append((w, reg))
+            self.shared += len(regs) - len(phys)
+            for n, (_, members) in enumerate(phys):
+                width = max(len(reg) for _, reg in members)
+                p = Signal(width, name=f"{members[0][1].name}_p", reset_less=True)
+                with self.m.If(self.en & _or_tree([self.at(w) for w, _ in members])):
+                    self.m.d.sync += p.eq(value[:width])
+                self.m.d.comb += [reg.eq(p) for _, reg in members]
 
     def _multipliers(self):
         """The multipliers: each operand a one-hot AND-OR over its distinct operands, registered;

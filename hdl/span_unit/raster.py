@@ -189,6 +189,7 @@ class Raster(Unit):
         v = sc.inputs(inputs, copy=idle_copy)
         coef = self.setup.program(sc, v)
         coef.update({k: v[k] for k in flat})          # held as tri is, in the input registers
+        sc.keep(*coef.values())                       # the walker reads them after the job
         sc.finish()
         last = sc.at(sc.length - 1)
         done = Signal()
