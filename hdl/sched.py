@@ -7,8 +7,8 @@ start pulse, so several jobs may be in flight. With ``ii``, jobs start only on e
 clock (``aligned``, a free-running count), the multipliers are reserved modulo ``ii``, and a
 register read more than ``ii`` offsets after it was written is read from a copy (``late``),
 so the next job never overwrites a value before its last read (:meth:`Schedule.check`);
-a division takes ``ceil((q_bits + 1) / ii)`` dividers in turn. Without ``ii``, the copies of
-one multiplier's products share registers where their lives (write to last read) do not
+a division takes ``ceil((q_bits + 1) / ii)`` dividers in turn. The copies of one
+multiplier's products share registers where their lives (write to last read) do not
 overlap (:meth:`Schedule._pool`): a copy is the product's sum register, so a shared one needs
 no multiplexer, only its write enables ORed.
 Everything advances with one enable, so a stalled schedule holds every value.
@@ -100,7 +100,7 @@ class Schedule:
     def _write(self, name, value, k, shape=None, en=None, pool=False):
         value = Value.cast(value)
         reg = Signal(shape or value.shape(), name=f"{self.name}_{name}", reset_less=True)
-        if pool and self.ii is None:                    # a register of its pool's: _pool
+        if pool:                                        # a register of its pool's: _pool
             self.pooled.append((reg, value, k))
         else:
             with self.m.If(self.en & self.at(k) if en is None else en):
@@ -386,28 +386,34 @@ class Schedule:
         self._pool()
 
     def _pool(self):
-        """The product copies' registers (one job at a time): those of one value (the same
-        multiplier's sum, the same ``post``) share a physical register where their lives do
-        not overlap. A copy written at offset w and last read at r holds (w, r]; the next
-        may be written at r or later. Left-edge allocation (fewest registers, optimal for
-        intervals); a copy that is never read here, or is an output, keeps its own."""
+        """The product copies' registers: those of one value (the same multiplier's sum, the
+        same ``post``) share a physical register where their lives do not overlap. A copy
+        written at offset w and last read at r holds (w, r]; with ``ii``, at those offsets
+        modulo ``ii`` (jobs in flight start a multiple of ``ii`` apart, and no register lives
+        longer than ``ii``: :meth:`check`). First fit in write order: without ``ii`` it is
+        left-edge allocation, the fewest registers for intervals. A copy that is never read
+        here, or is an output, keeps its own."""
         pools = {}
         for reg, value, w in self.pooled:
             r = None if reg in self.outputs else self.reads.get(reg)
             pools.setdefault(_key(value), (value, []))[1].append((w, r, reg))
         self.shared = 0                                  # registers saved (for reports)
         for value, regs in pools.values():
-            phys = []                                    # [free from, members]
+            phys = []                                    # [offsets held, members]
             for w, r, reg in sorted(regs, key=lambda x: x[0]):
-                slot = next((p for p in phys if r is not None and p[0] is not None
-                             and p[0] <= w), None)
+                live = None if r is None else set(range(w + 1, r + 1))
+                if live is not None and self.ii is not None:
+                    live = {k % self.ii for k in live}
+                slot = next((p for p in phys if live is not None and p[0] is not None
+                             and not (live & p[0]) and (self.ii is not None
+                                                        or max(p[0]) <= w)), None)
                 if slot is None:
-                    slot = [None, []]
+                    slot = [set(), []]
                     phys.append(slot)
-                slot[0] = r
+                slot[0] = None if live is None else slot[0] | live
                 slot[1].append((w, reg))
             self.shared += len(regs) - len(phys)
-            for n, (_, members) in enumerate(phys):
+            for members in (p[1] for p in phys):
                 width = max(len(reg) for _, reg in members)
                 p = Signal(width, name=f"{members[0][1].name}_p", reset_less=True)
                 with self.m.If(self.en & _or_tree([self.at(w) for w, _ in members])):
