@@ -6,13 +6,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from amaranth.back import verilog
-from amaranth.hdl import Module
+from amaranth.hdl import Module, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 
 from golden.fenney import texel_decode
-from hdl.dsp import Target, mult18
+from hdl.dsp import Target, mult18, soft_halves, soft_mult
 from hdl.units import make_unit
 from sim.fpga import SerialWrapper, markdown, run
 from sim.simulators import available
@@ -80,6 +80,36 @@ def test_flow_places_a_small_unit_on_ecp5_and_ice40(tmp_path):
     assert ice40["util"]["LC"] > 0 and ice40["dsp_unregistered"] == []
     md = markdown(rows, 1)
     assert "| texel_decode |" in md and "ECP5-25F" in md and "UP5K" in md
+
+
+@pytest.mark.parametrize("wa,wb,signed_b", [(6, 9, True), (4, 11, False), (3, 9, True)],
+                         ids=["weight-by-s9", "u4-by-u11", "u3-by-s9"])
+def test_soft_products_are_exact(wa, wb, signed_b):
+    """hdl.dsp.soft_mult and soft_halves (the products in logic: the bilinear weights,
+    fenney_polar's k2 and k3) against Python's integer product, exhaustively: an unsigned
+    narrow operand by a signed or unsigned wide one, given either way round. A signed
+    narrow operand is refused."""
+    a, b = Signal(wa), Signal(signed(wb) if signed_b else wb)
+    m, width = Module(), wa + wb + 2
+    ab, ba, lo, hi = (Signal(signed(width)) for _ in range(4))
+    l, h, k = soft_halves(a, b)
+    m.d.comb += [ab.eq(soft_mult(a, b)), ba.eq(soft_mult(b, a)), lo.eq(l), hi.eq(h)]
+    bad = []
+
+    async def bench(ctx):
+        for x in range(1 << wa):
+            for y in (range(-(1 << wb - 1), 1 << wb - 1) if signed_b else range(1 << wb)):
+                ctx.set(a, x)
+                ctx.set(b, y)
+                got = (ctx.get(ab), ctx.get(ba), ctx.get(lo) + (ctx.get(hi) << k))
+                if got != (x * y,) * 3:
+                    bad.append((x, y, got))
+    sim = Simulator(m)
+    sim.add_testbench(bench)
+    sim.run()
+    assert not bad, f"{len(bad)} wrong products; first (a, b, (a b, b a, halves)): {bad[0]}"
+    with pytest.raises(ValueError, match="narrower operand must be unsigned"):
+        soft_mult(Signal(signed(4)), Signal(8))
 
 
 class _Mult18s(wiring.Component):

@@ -20,7 +20,7 @@ rounding: 0.874 LSB of intensity at trig_bits = 10 (golden.fenney.polar_bound).
 """
 from amaranth.hdl import Mux
 
-from ..dsp import Product, soft_mult
+from ..dsp import Product, soft_halves
 from ..fixed import Field, u
 from ..lut import quarter_cos_lut, rom
 from ..trig import cos_lookup
@@ -90,9 +90,10 @@ def polar_lanes(p, v, s, r, lanes, trig_bits):
     new = {}
     for k, (_, k2, k3, _, _, _) in enumerate(lanes):
         for key, c, x in (("m12", v.pop(k2), sin_s), ("m14", v.pop(k3), cos_s)):
-            new.update({f"_{key}lo_{k}": soft_mult(c[:4], x), f"_{key}hi_{k}": soft_mult(c[4:], x)})
+            lo, hi, half = soft_halves(c, x)
+            new.update({f"_{key}lo_{k}": lo, f"_{key}hi_{k}": hi})
     v = p.stage(v, **new)
-    whole = lambda key, k: v.pop(f"_{key}lo_{k}") + (v.pop(f"_{key}hi_{k}") << 4)
+    whole = lambda key, k: v.pop(f"_{key}lo_{k}") + (v.pop(f"_{key}hi_{k}") << half)
     v = p.stage(v, **{f"_m20_{k}": Product(whole("m14", k)[:t + 8], v.pop(f"_cos_d{k}"))
                       for k in n},
                 **{f"_a22_{k}": (v.pop(k1) << (2 * t)) + (whole("m12", k) << t)

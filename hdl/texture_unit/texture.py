@@ -17,13 +17,15 @@
     ``F = weight_bits(b)`` bits of u, likewise along t;
   - each row: a = code(i0) 2**F + (code(i1) - code(i0)) f_s; then
     r = a(j0) 2**F + (a(j1) - a(j0)) f_t; the code is (r + 2**(2F-1)) >> 2F;
-  - three multipliers per code (two rows, one column), each alone in its stage.
+  - three products per code (two rows, one column), each in logic as two halves
+    (``hdl.dsp.soft_halves``), a clock for the halves and one for their sum.
   A filtered X/Z texel can leave the valid diamond |X| + |Z| <= 255: texel_decode's guard
   meets it downstream.
 """
 import numpy as np
 from amaranth.hdl import Cat, Mux
 
+from ..dsp import soft_halves
 from ..setup_unit.formats import VALUE
 
 __all__ = ["FILTERS", "MAX_TEXTURE", "banks", "memory_image", "lines", "filtered",
@@ -58,7 +60,7 @@ def address_stages(filter):
 
 
 def filter_stages(filter):
-    return 1 if filter == "nearest" else 5
+    return 1 if filter == "nearest" else 7
 
 
 def lines(p, v, s, t, size, filter, line):
@@ -118,13 +120,27 @@ def filtered(p, v, filter, bits, size):
             new[f"_{code}0{dj}"] = c0
             new[f"_{code}d{dj}"] = (c1 - c0)[:9].as_signed()
     v = p.stage(v, **new)
-    fs, ft = v.pop("_fs"), v.pop("_ft")
-    v = p.stage(v, **{f"_{code}a{dj}": (v.pop(f"_{code}0{dj}") << F) + v.pop(f"_{code}d{dj}") * fs
-                      for code in CODES for dj in (0, 1)}, _ft2=ft)
-    ft = v.pop("_ft2")
+    # Each product by a weight (F <= 6 bits) is logic, not a MULT18X18D: two soft halves in
+    # one clock, summed in the next (hdl.dsp.soft_halves). The six would otherwise take six
+    # of the 25F's 28 blocks, which fenney_xz's pipeline needs for its raster.
+    fs = v.pop("_fs")
+    new = {}
+    for code in CODES:
+        for dj in (0, 1):
+            lo, hi, k = soft_halves(fs, v.pop(f"_{code}d{dj}"))
+            new.update({f"_{code}l{dj}": lo, f"_{code}h{dj}": hi})
+    v = p.stage(v, **new)
+    v = p.stage(v, **{f"_{code}a{dj}": (v.pop(f"_{code}0{dj}") << F) + v.pop(f"_{code}l{dj}")
+                      + (v.pop(f"_{code}h{dj}") << k) for code in CODES for dj in (0, 1)})
     v = p.stage(v, **{f"_{code}r0": v[f"_{code}a0"] << F for code in CODES},
-                **{f"_{code}m": (v.pop(f"_{code}a1") - v.pop(f"_{code}a0")) * ft
-                   for code in CODES})
-    v = p.stage(v, **{f"_{code}": ((v.pop(f"_{code}r0") + v.pop(f"_{code}m")
+                **{f"_{code}ad": v.pop(f"_{code}a1") - v.pop(f"_{code}a0") for code in CODES})
+    ft = v.pop("_ft")
+    new = {}
+    for code in CODES:
+        lo, hi, k = soft_halves(ft, v.pop(f"_{code}ad"))
+        new.update({f"_{code}ml": lo, f"_{code}mh": hi})
+    v = p.stage(v, **new)
+    v = p.stage(v, **{f"_{code}": ((v.pop(f"_{code}r0") + v.pop(f"_{code}ml")
+                                   + (v.pop(f"_{code}mh") << k)
                                    + (1 << (2 * F - 1))) >> (2 * F))[:8] for code in CODES})
     return v
