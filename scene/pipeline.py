@@ -64,6 +64,7 @@ class ScenePipeline(Unit):
               "setup_mults": 1, "row_mults": 0,     # the raster's multipliers (hdl.span_unit)
               "setup_ii": 0, "setup_narrow": 0,     # its setup's interval, 18 x 18 multipliers
               "row_serial": 0,                      # its row engine's channels in turn
+              "setup_serial": 0,                    # its setup's channels in turn
               "bump": "none", "bump_size": 256, "texture": "external",
               "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
               "rsqrt_bits": 12,
@@ -77,7 +78,9 @@ class ScenePipeline(Unit):
               "row_mults": RasterUnit.RANGES["row_mults"],
               "setup_ii": RasterUnit.RANGES["setup_ii"],
               "setup_narrow": RasterUnit.RANGES["setup_narrow"],
-              "row_serial": RasterUnit.RANGES["row_serial"], "rsqrt_iters": (1, 3), "bump": BUMPS,
+              "row_serial": RasterUnit.RANGES["row_serial"],
+              "setup_serial": RasterUnit.RANGES["setup_serial"], "rsqrt_iters": (1, 3),
+              "bump": BUMPS,
               "bump_size": (16, MAX_TEXTURE), "filter": FILTERS,
               "trig_bits": (4, 16), "rotation": ("paper", "exact"),
               "rsqrt_bits": DotUnit.RANGES["rsqrt_bits"], "cache_lines": (2, 1024),

@@ -142,6 +142,23 @@ def test_channels_in_turn_keep_the_contract(mults, modes):
     _keeps_the_contract(unit, params, 11, 0.6, 6)
 
 
+@pytest.mark.parametrize("params", [
+    {"modes": "xshading,linear,xshading", "groups": "0,0,1", "setup_serial": 1,
+     "row_serial": 3},
+    {"modes": "linear,xshading", "setup_serial": 2, "row_serial": 1}],
+    ids=["groups-1-mult", "2-mults"])
+def test_setup_channels_in_turn_keep_the_contract(params):
+    """``setup_serial``: the setup's channels one after another on a datapath of their own
+    (eleven products a job: ceil(11 / M) clocks a channel on M multipliers), their constants
+    in a memory of two triangles' slots that the row engine's jobs read at their channel;
+    a linear channel through the X-shading datapath with its edge constants 0, and each
+    channel with its own group's. The same fragments within the same bound under
+    backpressure, the culled count and the latency its schedule states."""
+    params = {**SMALL, "channels": len(params["modes"].split(",")), **params}
+    unit = make_unit("raster", spec=True, **params)
+    _keeps_the_contract(unit, params, 13, 0.6, 8)
+
+
 OVERLAPPED = [
     {"modes": "exact,xshading,linear", "setup_ii": 12, "setup_mults": 4, "setup_narrow": 3},
     {"modes": "linear,xshading,xshading", "setup_ii": 24, "setup_mults": 1, "setup_narrow": 2}]
@@ -270,6 +287,10 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
     ({"setup_mults": 0}, "setup_mults must be in 1..6"),
     ({"row_mults": 2, "row_serial": 3}, "row_mults=2 and row_serial=3: the row engine is one"),
     ({"row_serial": 10}, "row_serial must be in 0..9"),
+    ({"setup_serial": 1}, "setup_serial=1 needs row_serial > 0"),
+    ({"setup_serial": 1, "row_serial": 3, "modes": "exact,linear"},
+     "setup_serial=1 needs row_serial > 0 (its jobs read the channels' constants in turn), "
+     "setup_ii=0 and no exact channel"),
     # 52 products: Omega 2, the edges' numerators 6, two Newton steps 4, the numerator
     # tracks 16, alpha 2, and 11 for each X-shading channel (a, b, c 3; Pu, Pv, P0, 2A 8)
     # of those, 30 fit 18 x 18: Omega 2, the edges' 6, the tracks' 16 and a, b, c 3 each

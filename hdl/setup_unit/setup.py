@@ -171,9 +171,12 @@ class Setup:
         S = 1 << self.w.sub_bits
         return (2 * y + S - 1) >> (self.w.sub_bits + 1)
 
-    def program(self, sc, v):
+    def program(self, sc, v, in_turn=False):
         """The setup of one triangle on schedule ``sc`` from the input registers ``v``;
-        returns the walker's values (registers)."""
+        returns the walker's values (registers). ``in_turn``: the channels are left to
+        :meth:`channel_job` (``span.channel_engine``); instead of their constants, the values
+        its jobs read: each channel's sorted ``i{ch}_0..2``, each group's ``e12 e13 e23``, and
+        ``au``, ``av``."""
         w, S = self.w, 1 << self.w.sub_bits
         size = 1 << w.screen_bits
         pos = lambda x: x[:w.wpos].as_signed()                         # see Widths.wpos
@@ -231,18 +234,42 @@ class Setup:
             n0 = out[f"{e}_n0"] = sc.let(f"{e}_n0", n - d)
             # n - 1 - rem - d = n0 + ~rem (-1 - rem = ~rem): two operands, not three
             out[f"{e}_r0"] = sc.let(f"{e}_r0", n0 + ~Cat(rem, Const(0, 1)).as_signed())
-        out.update(self._tracks(sc, r, out, xt, yt))
-        # alpha per pixel step: S y2 / Omega, -S y1 / Omega (eq 20), s(35, 34) saturated
+        # alpha per pixel step: S y2 / Omega, -S y1 / Omega (eq 20), s(35, 34) saturated;
+        # with the channels in turn, ahead of the tracks, for the channels' jobs to start
         lo, hi = -(1 << w.FA), (1 << w.FA) - 1
+        if not in_turn:
+            out.update(self._tracks(sc, r, out, xt, yt))
         alpha = {k: sc.let(k, _saturate(sc.mul(f"{k}_raw", val, rs, shifted=True), lo, hi)
                            .as_signed()[:OPERAND].as_signed())
                  for k, val in (("au", y2), ("av", -y1))}
+        if in_turn:
+            out.update(self._tracks(sc, r, out, xt, yt))
+            return {**out, **{k: {**v, **alpha}[k] for k in self.job_inputs}}
         g = self._exact_mid_edges(sc, v) if "exact" in self.modes else {}
         for ch, mode in enumerate(self.modes):
             coef = self._channel(sc, v, g, ch, mode)
             span = self._span(sc, coef, alpha, ch, mode == "linear")
             out.update({f"c{ch}_{k}": val for k, val in span.items()})
         return out
+
+    @property
+    def job_inputs(self):
+        """What :meth:`channel_job`'s jobs read of ``program(..., in_turn=True)``'s values."""
+        return (["au", "av"] + [f"i{ch}_{k}" for ch in range(self.channels) for k in range(3)]
+                + [f"{e}{self.suffix(ch)}" for ch in range(self.channels)
+                   for e in ("e12", "e13", "e23")])
+
+    def suffix(self, ch):
+        """The suffix of channel ``ch``'s group's edge constants."""
+        return edge_names(self.groups[ch])[0][3:]
+
+    def channel_job(self, sc, v):
+        """One channel's constants on a schedule of its own (``span.channel_engine``: the
+        channels in turn): a..f by X-shading (seed 001 eq 32), then the span's constants
+        (eq 22), from the job's inputs: ``i0_0..2``, the edge constants of channel 0's group's
+        names (0 for a linear channel: then a = b = c = 0 and every other sum is a linear
+        channel's, bit for bit) and ``au``, ``av``."""
+        return self._span(sc, self._channel(sc, v, {}, 0, "xshading"), v, 0, False)
 
     def shift(self, sh):
         """The schedule's shift: alpha = y2 r 2**(sub_bits + FA - R - sh)."""
@@ -359,7 +386,7 @@ class Setup:
         I1, I2, I3 = (v[f"i{ch}_{k}"] for k in range(3))
         up = w.FC - VALUE.frac_bits
         n = f"c{ch}"
-        sfx = edge_names(self.groups[ch])[0][3:]                      # its group's constants
+        sfx = self.suffix(ch)                                         # its group's constants
         if mode == "linear":
             z = Const(0, 1)
             return {"a": z, "b": z, "c": z, "d": (I2 - I1) << up, "e": (I3 - I1) << up,

@@ -25,8 +25,8 @@ from ..setup_unit.formats import (MODES, flat_fields, fragment_fields, parse_gro
                                    parse_modes, triangle_fields)
 from ..setup_unit.setup import Setup
 from ..unit import Unit
-from .span import (Link, row_engine, row_engine_serial, row_queue, setup_queue, stepper,
-                   walker, walker_constants)
+from .span import (Link, channel_engine, row_engine, row_engine_serial, row_queue,
+                   setup_queue, stepper, walker, walker_constants)
 
 __all__ = ["Raster"]
 
@@ -38,7 +38,7 @@ class Raster(Unit):
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
               "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0,
               "setup_mults": 1, "row_mults": 0, "setup_ii": 0, "setup_narrow": 0,
-              "row_serial": 0}
+              "row_serial": 0, "setup_serial": 0}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "groups": None,     # a string: parse_groups checks it
@@ -47,13 +47,21 @@ class Raster(Unit):
               "row_mults": (0, 13),      # the row engine's; 0: one per channel and one more
               "setup_ii": (0, 255),      # clocks between triangles in the setup; 0: one at a time
               "setup_narrow": (0, 6),    # the setup's 18 x 18 multipliers (one MULT18X18D each)
-              "row_serial": (0, 9)}      # >0: the row engine's channels in turn on this many
+              "row_serial": (0, 9),      # >0: the row engine's channels in turn on this many
+              "setup_serial": (0, 3)}    # >0: the setup's channels in turn on this many
     PER_CHANNEL = ("modes", "groups")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups,
-                 flat, setup_mults, row_mults, setup_ii, setup_narrow, row_serial):
+                 flat, setup_mults, row_mults, setup_ii, setup_narrow, row_serial,
+                 setup_serial):
         parse_modes(modes, channels)
+        if setup_serial and (not row_serial or setup_ii or "exact" in parse_modes(modes,
+                                                                                 channels)):
+            raise ValueError(f"setup_serial={setup_serial} needs row_serial > 0 (its jobs read "
+                             f"the channels' constants in turn), setup_ii=0 and no exact "
+                             f"channel; here row_serial={row_serial}, setup_ii={setup_ii}, "
+                             f"modes={modes!r}")
         if row_serial and row_mults:
             raise ValueError(f"row_mults={row_mults} and row_serial={row_serial}: the row "
                              f"engine is one or the other (row_mults=0 with row_serial)")
@@ -147,16 +155,17 @@ class Raster(Unit):
             m.d.comb += sq_take.eq(src_ready & sq_valid)
             pending = held.any()
         else:
-            coef, done_n, pending, end = self._one_at_a_time(m, sc, inputs, src_ready, flat)
+            coef, done_n, pending, end, consts = self._one_at_a_time(m, sc, inputs, src_ready,
+                                                                    flat, platform)
             current = None
         rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
         culled = Signal(32)
         rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat,
-                               current)
+                               current, in_memory=consts is not None)
         if self.params["row_serial"]:
             writes, started, written, re = row_engine_serial(
                 m, w, setup.modes, rows, rows_in, space, platform, flat,
-                self.params["row_serial"])
+                self.params["row_serial"], consts)
             re_ii, re_length, re_busy = re["ii"], re["length"], re["busy"]
         else:
             rows, early, re, written = row_engine(m, w, setup.modes, rows, rows_in, space,
@@ -170,12 +179,16 @@ class Raster(Unit):
         busy = (cur | self.o.valid | walking | rows_in.valid | written | queued | pending
                 | re_busy)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
-        self._timing = (ii or sc.length, re_ii, re_length, end)
+        self._timing = (ii or end + 1, re_ii, re_length, end)
         return m
 
-    def _one_at_a_time(self, m, sc, inputs, src_ready, flat):
+    def _one_at_a_time(self, m, sc, inputs, src_ready, flat, platform):
         """The setup taking a triangle while idle; its results held in the schedule's
-        registers until the walker takes them. Returns ``(values, valid_next, busy, end)``."""
+        registers until the walker takes them. With ``setup_serial``, the channels' jobs
+        (``channel_engine``) follow the schedule, reading its held registers, and write their
+        constants into the slot of the channel-constant memory that the walker does not
+        read: the walker's slot flips as it takes the triangle. Returns ``(values,
+        valid_next, busy, end, consts)``, ``consts`` the memory and the walker's slot."""
         # ready from registers only: the next triangle starts a clock after the walker takes
         # this one. The inputs are captured while the setup is idle (its ready), from copies
         # of ready, each a state machine of its own (Schedule.aligned_copy says why)
@@ -187,12 +200,26 @@ class Raster(Unit):
         ready = idle_copy()
         m.d.comb += [sc.start.eq(self.i.valid & ready), self.i.ready.eq(ready)]
         v = sc.inputs(inputs, copy=idle_copy)
-        coef = self.setup.program(sc, v)
+        in_turn = self.params["setup_serial"]
+        coef = self.setup.program(sc, v, in_turn=bool(in_turn))
         coef.update({k: v[k] for k in flat})          # held as tri is, in the input registers
         sc.keep(*coef.values())                       # the walker reads them after the job
         sc.finish()
-        last = sc.at(sc.length - 1)
+        last, end, consts, busy = sc.at(sc.length - 1), sc.length - 1, None, Const(0)
         done = Signal()
+        if in_turn:
+            # the jobs start as soon as what they read is ready (au, av), beside the rest of
+            # the schedule (the edges' divisions, the tracks); the setup ends with the later
+            rslot = Signal(name="cs_rslot")
+            with m.If(done & src_ready):              # the walker takes the triangle
+                m.d.sync += rslot.eq(~rslot)
+            go = sc._when(*(coef[k] for k in self.setup.job_inputs))
+            mem, a2, written, t = channel_engine(m, self.setup, coef, sc.at(go), ~rslot,
+                                                 platform, in_turn)
+            coef.update(a2)
+            consts, busy = (mem, rslot), t["busy"]
+            if go + t["end"] > end:
+                last, end = written, go + t["end"]
         done_n = last | (done & ~src_ready)
         m.d.sync += done.eq(done_n)
         running = []
@@ -200,7 +227,7 @@ class Raster(Unit):
             running.append(Signal(name=f"su_running{k}"))
             run_n = (self.i.valid & r) | (running[k] & ~last)
             m.d.sync += [running[k].eq(run_n), r.eq(~run_n & ~done_n)]
-        return coef, done_n, running[0] | done, sc.length - 1
+        return coef, done_n, running[0] | done | busy, end, consts
 
 
 @functools.lru_cache(maxsize=None)

@@ -28,7 +28,8 @@ from amaranth.lib.memory import Memory
 from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule, _or_tree
 from ..setup_unit.formats import VALUE
 
-__all__ = ["Link", "walker", "walker_constants", "row_engine", "row_engine_serial", "row_products", "row_queue", "setup_queue", "stepper"]
+__all__ = ["Link", "walker", "walker_constants", "row_engine", "row_engine_serial", "row_products",
+           "row_queue", "setup_queue", "channel_engine", "stepper"]
 
 
 class Link:
@@ -46,15 +47,15 @@ def _step(i, r, q, d, n):
     return i + q + carry, Mux(carry, r + n, r - d)
 
 
-def walker_constants(channels, flat=()):
-    """The triangle's values the walker holds for its rows, unchanged while it walks."""
-    return ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels)
-                                        for k in ("a", "b", "c", "d", "e", "f", "pu", "pv",
-                                                  "p0", "a2")]
+def walker_constants(channels, flat=(), in_memory=False):
+    """The triangle's values the walker holds for its rows, unchanged while it walks
+    (``in_memory``: a channel's but 2A are in ``channel_engine``'s memory)."""
+    keys = ("a2",) if in_memory else ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")
+    return ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels) for k in keys]
 
 
 def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, flat=(),
-           current=None):
+           current=None, in_memory=False):
     """Rows from triangles. ``src``: the setup's values; returns the row values (the edges'
     columns ``xl``, ``xr`` of row ``j``, unclamped, the numerator tracks of the left edge's
     first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left).
@@ -64,7 +65,7 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, fla
     j = Signal(w.wrow)
     to_j1, to_jm = (Signal(signed(w.wrow + 1), name=f"w_{k}") for k in ("to_j1", "to_jm"))
     left_long = Signal()
-    keep = [] if current else walker_constants(channels, flat)
+    keep = [] if current else walker_constants(channels, flat, in_memory)
     held = current or {k: Signal.like(src[k], name=f"w_{k}") for k in keep}
     edge = {}
     for e in ("l", "s", "t"):
@@ -248,7 +249,8 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     return out, early, sc, out_valid
 
 
-def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=3):
+def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=3,
+                      consts=None):
     """The row engine with its channels in turn: one datapath, on ``mults`` shared
     multipliers, evaluates one channel of one row per job, a job every ``ii`` clocks, so a
     further channel costs clocks per row (``ii`` each) and a share of the operand
@@ -259,21 +261,19 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     its channel's constants, picked by a one-hot channel register) and recomputes u and v
     (nine products, four with no quadratic channel); the walker's row is taken at the last
     channel's start, so it and the triangle's constants stay steady while the jobs read
-    them. Returns the writes into the row queue (``(name, values, enable, slot)``), the
-    last job's start (the queue's credit), its write, and the timing."""
+    them. ``consts``: the channel-constant memory of ``channel_engine`` and the slot the
+    walker reads (``(consts, slot)``), read at the next job's channel in place of the
+    walker's registers. Returns the writes into the row queue (``(name, values, enable,
+    slot)``), the last job's start (the queue's credit), its write, and the timing."""
     channels = len(modes)
     quad = any(mode != "linear" for mode in modes)
     ii = -(-(9 if quad else 4) // mults)
     sc = Schedule(m, "rs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
-    sel = [Signal(name=f"rs_sel{c}", init=c == 0) for c in range(channels)]   # next job's
-    under = ~sel[0]                            # a row's jobs are under way
+    sel, index, under = _turns(m, sc, "rs", channels, row_link.valid & space)   # next job's
     slot = Signal(4, name="rs_slot")           # the row's place in the row queue (4 bits wrap)
-    m.d.comb += [sc.start.eq(sc.aligned & (under | (row_link.valid & space))),
-                 row_link.ready.eq(sc.aligned & sel[-1] & (under | space))]
-    with m.If(sc.start):
-        m.d.sync += [sel[c].eq(sel[c - 1]) for c in range(channels)]
-        with m.If(sel[-1]):
-            m.d.sync += slot.eq(slot + 1)
+    m.d.comb += row_link.ready.eq(sc.aligned & sel[-1] & (under | space))
+    with m.If(sc.start & sel[-1]):
+        m.d.sync += slot.eq(slot + 1)
     # the row counts in the queue's credits from its last job's start, a start from
     # registers (with more than one channel): the first job's check of ``space`` holds a
     # place, as no other row starts before the last job and the queue only empties meanwhile
@@ -281,8 +281,13 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     m.d.comb += started.eq(sc.aligned & sel[-1] if channels > 1 else sc.start)  # sel[-1]:
     # under, so this is sc.start & sel[-1], written so that no path runs from the walker
     keys = ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")
-    pick = {k: _or_tree([Mux(sel[c], rows[f"c{c}_{k}"], 0) for c in range(channels)])
-            for k in keys}
+    if consts is None:
+        pick = {k: _or_tree([Mux(sel[c], rows[f"c{c}_{k}"], 0) for c in range(channels)])
+                for k in keys}
+    else:
+        mem, rslot = consts
+        m.d.comb += mem["port"].addr.eq(Cat(index[:mem["bits"]], rslot))
+        pick = {k: mem["fields"][k] for k in keys}
     row_keys = ("xl", "xr", "E_u", "E_v", "B_u", "B_v", "rs", "sh")
     v = sc.inputs({**{k: rows[k] for k in row_keys}, **pick, "slot": slot, "sel": Cat(*sel)},
                   copy=sc.aligned_copy)
@@ -415,6 +420,76 @@ def _fields(data, like):
         out[k] = data[at:at + n].as_signed() if x.shape().signed else data[at:at + n]
         at += n
     return out
+
+
+def channel_engine(m, setup, src, go, wslot, platform=None, mults=1):
+    """The setup's channels in turn: one datapath on ``mults`` wide multipliers computes one
+    channel's constants per job (``Setup.channel_job``: a..f, Pu, Pv, P0 and 2A), a job every
+    ``ii = ceil(11 / mults)`` clocks, the first at ``go`` (a pulse, with the engine idle), so a
+    further channel costs ``ii`` clocks per triangle, not registers or multipliers. Each job
+    captures its channel's inputs from the setup's held registers ``src`` (picked by a
+    one-hot channel register) and writes a..f, Pu, Pv and P0 into the channel-constant memory
+    (distributed RAM, a channel's constants a word: ``2 x 2**ceil(log2 channels)`` words, two
+    triangles' worth), at slot ``wslot`` (the one the walker does not read), and 2A into a
+    register per channel (the walker holds it for the row queue). Returns the memory's read
+    port with its fields, the registers of 2A, the last job's write (the setup's end) and the
+    timing."""
+    channels, modes = setup.channels, setup.modes
+    ii = -(-11 // mults)
+    sc = Schedule(m, "cs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
+    sel, index, under = _turns(m, sc, "cs", channels, go)
+    pick = lambda key: _or_tree([Mux(sel[c], src[key(c)], 0) for c in range(channels)])
+    quad = [c for c, mode in enumerate(modes) if mode != "linear"]
+    s0 = setup.suffix(0)
+    vals = {f"i0_{k}": pick(lambda c: f"i{c}_{k}") for k in range(3)}
+    # a linear channel's edge constants are 0: its a, b, c come out 0, so its sums are linear
+    vals.update({f"{e}{s0}": _or_tree([Mux(sel[c], src[f"{e}{setup.suffix(c)}"], 0)
+                                        for c in quad] or [Const(0, 1)])
+                 for e in ("e12", "e13", "e23")})
+    vals.update(au=src["au"], av=src["av"], slot=wslot, index=index, sel=Cat(*sel))
+    v = sc.inputs(vals, copy=sc.aligned_copy)
+    out = setup.channel_job(sc, v)
+    keys = ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")
+    end = sc._when(*out.values())
+    data = {k: sc._late_at(out[k], end) for k in (*keys, "a2")}
+    slot, idx, chan = (sc.late(v[k], end) for k in ("slot", "index", "sel"))
+    sc._read(end, *data.values(), slot, idx, chan)
+    en = sc.at(end)
+    bits = max(1, (channels - 1).bit_length())
+    words = {k: data[k] for k in keys}
+    mem = Memory(shape=unsigned(sum(len(x) for x in words.values())), depth=2 << bits, init=[])
+    m.submodules["channel_consts"] = mem
+    wr, rd = mem.write_port(), mem.read_port(domain="comb")
+    m.d.comb += [wr.addr.eq(Cat(idx[:bits], slot)), wr.data.eq(Cat(*words.values())),
+                 wr.en.eq(en)]
+    a2 = {}
+    for c in range(channels):
+        a2[f"c{c}_a2"] = r = Signal.like(data["a2"], name=f"cs_a2_{c}", reset_less=True)
+        with m.If(en & chan[c]):
+            m.d.sync += r.eq(data["a2"])
+    last = Signal(name="cs_written")
+    m.d.comb += last.eq(en & chan[-1])
+    sc.finish()
+    sc.check()
+    busy = Signal(name="cs_busy")
+    m.d.comb += busy.eq(sc.busy() | under)
+    consts = {"port": rd, "bits": bits, "fields": _fields(rd.data, words)}
+    return consts, a2, last, {"ii": ii, "end": (channels - 1) * ii + end, "busy": busy}
+
+
+def _turns(m, sc, name, channels, first):
+    """The channel of the next job of ``sc`` (a schedule with an interval), one-hot and as an
+    index: a row's (or triangle's) jobs start with ``first`` and go on every ``ii`` clocks,
+    one a channel. Returns ``(sel, index, under)``, ``under`` high between its first and its
+    last job's start."""
+    sel = [Signal(name=f"{name}_sel{c}", init=c == 0) for c in range(channels)]
+    index = Signal(range(max(channels, 2)), name=f"{name}_index")
+    under = ~sel[0]
+    m.d.comb += sc.start.eq(sc.aligned & (under | first))
+    with m.If(sc.start):
+        m.d.sync += [sel[c].eq(sel[c - 1]) for c in range(channels)]
+        m.d.sync += index.eq(Mux(sel[-1], 0, index + 1))
+    return sel, index, under
 
 
 def setup_queue(m, sc, values, space, take, current=(), depth=15):

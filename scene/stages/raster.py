@@ -33,7 +33,8 @@ class Raster(Stage):
         self.params = dict(screen_bits=q["screen_bits"], sub_bits=q["sub_bits"],
                            channels=len(channels), modes=",".join(m for _, m, _ in channels),
                            recip=q["recip"], recip_iters=q["recip_iters"])
-        knobs = ("setup_mults", "row_mults", "setup_ii", "setup_narrow", "row_serial")
+        knobs = ("setup_mults", "row_mults", "setup_ii", "setup_narrow", "row_serial",
+                 "setup_serial")
         self.params.update({k: q[k] for k in knobs
                             if q[k] != RasterUnit.PARAMS[k]})      # defaults: Verilog unchanged
         if any(g for _, _, g in channels):
