@@ -128,6 +128,11 @@ def configurations(quick=False, knobs=None):
         hw = {"row_serial": n}
         rows.append(_row("row engine", f"channels in turn, {n} multipliers", raster(**hw),
                          scene="default", hardware=hw, unit=unit_raster(**hw)))
+    # the setup's channels in turn too (their constants in a RAM the row engine's jobs read)
+    for n in (1, 2):
+        hw = {"row_serial": 3, "setup_serial": n}
+        rows.append(_row("setup channels", f"in turn, {n} multiplier{'s' * (n > 1)} (row 3)",
+                         raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw)))
     # the rotation: method (the exact one's CORDIC iterations), angle bits, table address bits
     for label, p, scene in (("paper", {}, "bump_angular"),
                             ("exact", {"method": "exact"}, "bump_angular_exact"),

@@ -153,7 +153,7 @@ class Raster(Unit):
             sc.finish()
             sc.check()
             m.d.comb += sq_take.eq(src_ready & sq_valid)
-            pending = held.any()
+            pending, consts = held.any(), None
         else:
             coef, done_n, pending, end, consts = self._one_at_a_time(m, sc, inputs, src_ready,
                                                                     flat, platform)
