@@ -41,13 +41,17 @@ def _deps(value):
 
 class Schedule:
     def __init__(self, m, name, en, ii=None, mults=1, shift=None, mux_groups=None,
-                 platform=None, narrow=0):
+                 platform=None, narrow=0, host=None):
         """``shift = (amount, left)``: products asked for ``shifted`` come out as
         ``(a * b << left) >> amount``, two clocks later (one two-stage shifter per multiplier
         that has such products; ``amount`` must be steady over the job). ``platform``: the
         multipliers' blocks are instantiated with their registers on ECP5 (:mod:`hdl.dsp`).
         ``narrow``: multipliers of one 18 x 18 block each, for the products whose operands
-        fit ``NARROW`` signed bits (all of those, when there are any narrow ones)."""
+        fit ``NARROW`` signed bits (all of those, when there are any narrow ones).
+        ``host``: ``(schedule, index)``, a schedule whose multiplier ``index`` is this one's
+        first: this one's operands join that multiplier's multiplexer, and its products come
+        from that sum register. Finish this one first; the caller keeps their products apart
+        in time (this one's jobs run only while the host issues none)."""
         self.m, self.name, self.en, self.ii, self.shift = m, name, en, ii, shift
         self.platform = platform
         # with many operations per multiplier: the operand multiplexer in two registered
@@ -64,6 +68,7 @@ class Schedule:
         self.length = 1                                  # offsets used
         self.outputs = SignalSet()                       # read by the next stage, not here
         self.pooled = []                                 # (register, value, offset): _pool
+        self.host, self.guests = host, {}                # guests: index -> operand terms
 
     def at(self, k):
         """The phase bit of offset ``k``: high while the job that started ``k`` clocks ago is
@@ -234,6 +239,8 @@ class Schedule:
 
     def _total(self, idx, narrow=False):
         """A multiplier's product: a register (wide), or the block's output (narrow)."""
+        if self.host and not narrow and idx == 0:
+            return self.host[0]._total(self.host[1])
         if not hasattr(self, "_totals"):
             self._totals = [Signal(signed(2 * OPERAND), name=f"{self.name}_m{n}_sum",
                                    reset_less=True) for n in range(len(self.mults))]
@@ -372,6 +379,11 @@ class Schedule:
             with self.m.If(self.en):
                 self.m.d.sync += [count.eq(nxt), aligned.eq(~nxt.any() | idle)]  # no "== 0"
 
+    @property
+    def last_issue(self):
+        """The last offset at which a job issues a product (-1: none)."""
+        return max((k for unit in self.mults + self.narrow for k, _, _ in unit), default=-1)
+
     def keep(self, *values):
         """The registers in ``values`` are read by the next stage, after the job: never
         shared (call before :meth:`finish`)."""
@@ -428,10 +440,17 @@ class Schedule:
         for narrow, units in ((False, self.mults), (True, self.narrow)):
             bits = NARROW if narrow else OPERAND
             for idx, unit in enumerate(units):
-                if not unit:
+                guests = [] if narrow else self.guests.get(idx, [])
+                if not unit and not guests:
                     continue
                 n = f"{self.name}_{'n' if narrow else 'm'}{idx}"
                 opa, opb = _operands(self, n, unit, bits)
+                if self.host and not narrow and idx == 0:      # the host's multiplier
+                    host, at = self.host
+                    host.guests.setdefault(at, []).append((opa, opb))
+                    continue
+                for ga, gb in guests:
+                    opa, opb = opa + ga, opb + gb
                 if self.mux_groups:
                     opa, opb = (self._grouped(f"{n}_{x}", terms, bits)
                                 for x, terms in (("a", opa), ("b", opb)))

@@ -204,22 +204,23 @@ class Raster(Unit):
         coef = self.setup.program(sc, v, in_turn=bool(in_turn))
         coef.update({k: v[k] for k in flat})          # held as tri is, in the input registers
         sc.keep(*coef.values())                       # the walker reads them after the job
-        sc.finish()
         last, end, consts, busy = sc.at(sc.length - 1), sc.length - 1, None, Const(0)
         done = Signal()
         if in_turn:
-            # the jobs start as soon as what they read is ready (au, av), beside the rest of
-            # the schedule (the edges' divisions, the tracks); the setup ends with the later
+            # the jobs share the setup's multiplier: they start once what they read is ready
+            # (au, av) and the setup has issued its last product, beside the rest of its
+            # schedule (the edges' divisions); the setup ends with the later
             rslot = Signal(name="cs_rslot")
             with m.If(done & src_ready):              # the walker takes the triangle
                 m.d.sync += rslot.eq(~rslot)
-            go = sc._when(*(coef[k] for k in self.setup.job_inputs))
+            go = max(sc._when(*(coef[k] for k in self.setup.job_inputs)), sc.last_issue + 1)
             mem, a2, written, t = channel_engine(m, self.setup, coef, sc.at(go), ~rslot,
-                                                 platform, in_turn)
+                                                 platform, in_turn, host=(sc, 0))
             coef.update(a2)
             consts, busy = (mem, rslot), t["busy"]
             if go + t["end"] > end:
                 last, end = written, go + t["end"]
+        sc.finish()                                   # after its guest's (channel_engine)
         done_n = last | (done & ~src_ready)
         m.d.sync += done.eq(done_n)
         running = []

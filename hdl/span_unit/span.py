@@ -422,7 +422,7 @@ def _fields(data, like):
     return out
 
 
-def channel_engine(m, setup, src, go, wslot, platform=None, mults=1):
+def channel_engine(m, setup, src, go, wslot, platform=None, mults=1, host=None):
     """The setup's channels in turn: one datapath on ``mults`` wide multipliers computes one
     channel's constants per job (``Setup.channel_job``: a..f, Pu, Pv, P0 and 2A), a job every
     ``ii = ceil(11 / mults)`` clocks, the first at ``go`` (a pulse, with the engine idle), so a
@@ -431,12 +431,15 @@ def channel_engine(m, setup, src, go, wslot, platform=None, mults=1):
     one-hot channel register) and writes a..f, Pu, Pv and P0 into the channel-constant memory
     (distributed RAM, a channel's constants a word: ``2 x 2**ceil(log2 channels)`` words, two
     triangles' worth), at slot ``wslot`` (the one the walker does not read), and 2A into a
-    register per channel (the walker holds it for the row queue). Returns the memory's read
-    port with its fields, the registers of 2A, the last job's write (the setup's end) and the
+    register per channel (the walker holds it for the row queue). ``host``: ``(schedule,
+    index)``, the setup's multiplier that is this engine's first (``Schedule``'s ``host``:
+    the jobs then run after the setup's last product). Returns the memory's read port with
+    its fields, the registers of 2A, the last job's write (the setup's end) and the
     timing."""
     channels, modes = setup.channels, setup.modes
     ii = -(-11 // mults)
-    sc = Schedule(m, "cs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
+    sc = Schedule(m, "cs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform,
+                  host=host)
     sel, index, under = _turns(m, sc, "cs", channels, go)
     pick = lambda key: _or_tree([Mux(sel[c], src[key(c)], 0) for c in range(channels)])
     quad = [c for c, mode in enumerate(modes) if mode != "linear"]
