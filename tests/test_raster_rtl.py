@@ -113,19 +113,19 @@ def test_multiplier_knobs_keep_the_contract():
     _keeps_the_contract(unit, params, 9, 0.7, 4)
 
 
-def _keeps_the_contract(unit, params, rng, p_ready, seed):
+def _keeps_the_contract(unit, params, rng, p_ready, seed, simulator="amaranth"):
     """The hard cases and 12 random triangles under backpressure: coverage, the 1-LSB bound,
     the culled count; a whole-screen triangle's first fragment at the stated latency."""
     p = unit.params
     hard, labels = raster_hard_cases(**p)
     extra = random_triangles(np.random.default_rng(rng), 12, **p)
     inputs = {k: np.concatenate([hard[k], extra[k]]) for k in hard}
-    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=p_ready,
+    out, info = stream("raster", inputs, simulator, params, p_valid=0.8, p_ready=p_ready,
                        seed=seed)
     check(inputs, out, p)
     assert info["culled"] == raster.culled(inputs)
     k = labels.index("whole screen")
-    _, info = stream("raster", {f: hard[f][k:k + 1] for f in hard}, "amaranth", params)
+    _, info = stream("raster", {f: hard[f][k:k + 1] for f in hard}, simulator, params)
     assert info["latency"] == unit.latency
 
 
@@ -142,21 +142,28 @@ def test_channels_in_turn_keep_the_contract(mults, modes):
     _keeps_the_contract(unit, params, 11, 0.6, 6)
 
 
-@pytest.mark.parametrize("params", [
-    {"modes": "xshading,linear,xshading", "groups": "0,0,1", "setup_serial": 1,
-     "row_serial": 3},
-    {"modes": "linear,xshading", "setup_serial": 2, "row_serial": 1}],
-    ids=["groups-1-mult", "2-mults"])
-def test_setup_channels_in_turn_keep_the_contract(params):
+IN_TURN = [{"modes": "xshading,linear,xshading", "groups": "0,0,1", "setup_serial": 1,
+            "row_serial": 3},
+           {"modes": "linear,xshading", "setup_serial": 2, "row_serial": 1}]
+
+
+@pytest.mark.parametrize("simulator,params", [
+    pytest.param("amaranth", IN_TURN[0], id="amaranth-groups-1-mult"),
+    pytest.param("amaranth", IN_TURN[1], id="amaranth-2-mults", marks=pytest.mark.long),
+    *(pytest.param(c.values[0], IN_TURN[0], id=f"{c.id}-groups-1-mult",
+                   marks=[*c.marks, pytest.mark.long])
+      for c in per_simulator(["raster"], only=("verilator", "icarus")))])
+def test_setup_channels_in_turn_keep_the_contract(simulator, params):
     """``setup_serial``: the setup's channels one after another on a datapath of their own
-    (eleven products a job: ceil(11 / M) clocks a channel on M multipliers), their constants
+    (eleven products a job: ceil(11 / M) clocks a channel on M multipliers, the first the
+    setup's own, shared: its jobs start after the setup's last product), their constants
     in a memory of two triangles' slots that the row engine's jobs read at their channel;
     a linear channel through the X-shading datapath with its edge constants 0, and each
     channel with its own group's. The same fragments within the same bound under
     backpressure, the culled count and the latency its schedule states."""
     params = {**SMALL, "channels": len(params["modes"].split(",")), **params}
     unit = make_unit("raster", spec=True, **params)
-    _keeps_the_contract(unit, params, 13, 0.6, 8)
+    _keeps_the_contract(unit, params, 13, 0.6, 8, simulator)
 
 
 OVERLAPPED = [
