@@ -19,7 +19,7 @@ from contextlib import contextmanager
 import math
 import operator
 
-from amaranth.hdl import Module, Signal, Value
+from amaranth.hdl import Module, Mux, Signal, Value
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -27,7 +27,7 @@ from .dsp import Product, mult18
 from .fixed import layout
 from .lut import RomRead, read_roms
 
-__all__ = ["Pipeline", "Unit", "check_int", "check_bool", "check_float", "check_param",
+__all__ = ["Pipeline", "Unit", "skid", "check_int", "check_bool", "check_float", "check_param",
            "param_range"]
 
 
@@ -96,6 +96,24 @@ class _Pending:
 
     def __init__(self, product):
         self.product = product
+
+
+def skid(m, name, src, dst):
+    """``src`` to ``dst`` (streams of one payload) through a skid buffer of one item: while
+    it is empty, valid and payload pass in the same clock (no latency); an item offered while
+    ``dst`` is not ready is held and goes first. ``src.ready`` is a register (the buffer is
+    empty), so no combinational path runs from ``dst.ready`` back into ``src``: a chain of
+    stages whose readies would otherwise ripple through every one of them is cut here.
+    Returns the buffer's busy bit."""
+    full = Signal(name=f"{name}_full")
+    held = Signal(len(src.payload.as_value()), name=f"{name}_held", reset_less=True)
+    m.d.comb += [src.ready.eq(~full), dst.valid.eq(src.valid | full),
+                 dst.payload.eq(Mux(full, held, src.payload.as_value()))]
+    with m.If(dst.ready):
+        m.d.sync += full.eq(0)
+    with m.Elif(src.valid & ~full):
+        m.d.sync += [full.eq(1), held.eq(src.payload.as_value())]
+    return full
 
 
 class Pipeline:

@@ -28,7 +28,7 @@ from hdl.setup_unit.formats import MODES, VALUE
 from hdl.shade_unit.formats import LEVEL, RGB
 from hdl.span_unit import Raster as RasterUnit
 from hdl.texture_unit import FILTERS, MAX_TEXTURE
-from hdl.unit import Unit
+from hdl.unit import Unit, skid
 from hdl.units import PIPELINES
 
 from . import host
@@ -171,7 +171,11 @@ class ScenePipeline(Unit):
                              bases={key: base for (name, key), base in self.table_bases.items()
                                     if name == stage.name}, platform=platform)
             m.submodules[stage.name] = unit
-            wiring.connect(m, last, unit.i)
+            if k:                # between two stages: a skid buffer cuts the chain of readies
+                full = skid(m, f"skid_{stage.name}", last, unit.i)
+                busy, held[-1] = busy | full, held[-1] | full
+            else:                # the raster's output is a register beside a skid buffer
+                wiring.connect(m, last, unit.i)
             m.d.comb += [getattr(unit, f"u_{f.name}").eq(regs[f.name]) for f in stage.uniforms]
             if stage.tables:
                 m.d.comb += [getattr(unit, s.name).eq(s) for s in w]
