@@ -41,7 +41,7 @@ def _deps(value):
 
 class Schedule:
     def __init__(self, m, name, en, ii=None, mults=1, shift=None, mux_groups=None,
-                 platform=None, narrow=0, host=None):
+                 platform=None, narrow=0, host=None, share=True):
         """``shift = (amount, left)``: products asked for ``shifted`` come out as
         ``(a * b << left) >> amount``, two clocks later (one two-stage shifter per multiplier
         that has such products; ``amount`` must be steady over the job). ``platform``: the
@@ -51,7 +51,8 @@ class Schedule:
         ``host``: ``(schedule, index)``, a schedule whose multiplier ``index`` is this one's
         first: this one's operands join that multiplier's multiplexer, and its products come
         from that sum register. Finish this one first; the caller keeps their products apart
-        in time (this one's jobs run only while the host issues none)."""
+        in time (this one's jobs run only while the host issues none). ``share=False``: each
+        product copy keeps a register of its own (:meth:`_pool`)."""
         self.m, self.name, self.en, self.ii, self.shift = m, name, en, ii, shift
         self.platform = platform
         # with many operations per multiplier: the operand multiplexer in two registered
@@ -69,6 +70,7 @@ class Schedule:
         self.outputs = SignalSet()                       # read by the next stage, not here
         self.pooled = []                                 # (register, value, offset): _pool
         self.host, self.guests = host, {}                # guests: index -> operand terms
+        self.share = share
 
     def at(self, k):
         """The phase bit of offset ``k``: high while the job that started ``k`` clocks ago is
@@ -407,7 +409,7 @@ class Schedule:
         here, or is an output, keeps its own."""
         pools = {}
         for reg, value, w in self.pooled:
-            r = None if reg in self.outputs else self.reads.get(reg)
+            r = None if reg in self.outputs or not self.share else self.reads.get(reg)
             pools.setdefault(_key(value), (value, []))[1].append((w, r, reg))
         self.shared = 0                                  # registers saved (for reports)
         for value, regs in pools.values():
