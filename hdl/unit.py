@@ -99,21 +99,25 @@ class _Pending:
 
 
 def skid(m, name, src, dst):
-    """``src`` to ``dst`` (streams of one payload) through a skid buffer of one item: while
-    it is empty, valid and payload pass in the same clock (no latency); an item offered while
-    ``dst`` is not ready is held and goes first. ``src.ready`` is a register (the buffer is
-    empty), so no combinational path runs from ``dst.ready`` back into ``src``: a chain of
-    stages whose readies would otherwise ripple through every one of them is cut here.
-    Returns the buffer's busy bit."""
-    full = Signal(name=f"{name}_full")
-    held = Signal(len(src.payload.as_value()), name=f"{name}_held", reset_less=True)
-    m.d.comb += [src.ready.eq(~full), dst.valid.eq(src.valid | full),
-                 dst.payload.eq(Mux(full, held, src.payload.as_value()))]
-    with m.If(dst.ready):
-        m.d.sync += full.eq(0)
-    with m.Elif(src.valid & ~full):
-        m.d.sync += [full.eq(1), held.eq(src.payload.as_value())]
-    return full
+    """``src`` to ``dst`` (streams of one payload) through a register slice: ``dst.valid``
+    and ``dst.payload`` are registers, and so is ``src.ready`` (a skid register of one item
+    is empty), so a boundary between two stages is a clock with nothing combinational across
+    it, neither the readies (which would otherwise ripple through every stage) nor the
+    payload's multiplexer (its select a register, its output into one). One clock of latency;
+    one item a clock. An item offered while the output is held goes into the skid register
+    and out before anything newer. Returns the slice's busy bit (it holds an item)."""
+    payload = Value.cast(src.payload)
+    full = Signal(name=f"{name}_full")                  # the skid register holds an item
+    held = Signal(len(payload), name=f"{name}_held", reset_less=True)
+    valid = Signal(name=f"{name}_valid")                # the output register holds an item
+    data = Signal(len(payload), name=f"{name}_data", reset_less=True)
+    m.d.comb += [src.ready.eq(~full), dst.valid.eq(valid), dst.payload.eq(data)]
+    with m.If(~valid | dst.ready):                      # the output register takes its next
+        m.d.sync += [valid.eq(full | src.valid), full.eq(0),
+                     data.eq(Mux(full, held, payload))]
+    with m.Elif(src.valid & ~full):                     # held: the offered item into the skid
+        m.d.sync += [full.eq(1), held.eq(payload)]
+    return full | valid
 
 
 class Pipeline:

@@ -135,7 +135,9 @@ class ScenePipeline(Unit):
 
     @property
     def shading_latency(self):
-        return sum(s.latency for s in self.stages[1:])
+        """The shading stages' own, and a clock for each register slice between two."""
+        rest = self.stages[1:]
+        return sum(s.latency for s in rest) + max(len(rest) - 1, 0)
 
     @property
     def latency(self):
@@ -171,7 +173,7 @@ class ScenePipeline(Unit):
                              bases={key: base for (name, key), base in self.table_bases.items()
                                     if name == stage.name}, platform=platform)
             m.submodules[stage.name] = unit
-            if k:                # between two stages: a skid buffer cuts the chain of readies
+            if k:                # between two stages: a register slice (hdl.unit.skid)
                 full = skid(m, f"skid_{stage.name}", last, unit.i)
                 busy, held[-1] = busy | full, held[-1] | full
             else:                # the raster's output is a register beside a skid buffer

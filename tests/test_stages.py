@@ -22,10 +22,11 @@ def _example():
 
 @pytest.mark.parametrize("scene", ["default", "phong", "bump_xz", "bump_polar", "bump_angular"])
 def test_latency_is_the_stages_sum(scene):
-    """The top's latency is the raster's plus each stage's, each from its units."""
+    """The top's latency is the raster's plus each stage's, each from its units, plus a clock
+    for each register slice between two shading stages."""
     prep = S.prepare(S.load(f"scenes/{scene}.toml"))
     pipe = prep["pipeline"]
-    assert pipe.latency == sum(s.latency for s in pipe.stages)
+    assert pipe.latency == sum(s.latency for s in pipe.stages) + len(pipe.stages) - 2
     assert [s.name for s in pipe.stages][0] == "raster" and pipe.stages[-1].name == "colour"
     assert units_in(ScenePipeline(**prep["params"])) == sorted(s.name for s in pipe.stages)
 
@@ -43,7 +44,7 @@ def test_a_new_effect_is_one_file_and_one_line(monkeypatch):
     assert [s.name for s in prep["pipeline"].stages][-2:] == ["colour", "depth_cue"]
     assert prep["uniforms"]["cue_near"] == 255
     out, info = simulate("scene", prep["params"], S.rtl_inputs(prep), "amaranth")
-    assert info["latency"] == prep["pipeline"].latency == plain["pipeline"].latency + 2
+    assert info["latency"] == prep["pipeline"].latency == plain["pipeline"].latency + 2 + 1   # its own, a slice
     img, cov, _ = S.model(prep)
     rgb = np.stack([out[c] for c in "rgb"], -1).astype(np.uint8)
     rtl, rcov = S.framebuffer(prep["size"], out["x"], out["y"], out["depth"], rgb,
@@ -52,3 +53,58 @@ def test_a_new_effect_is_one_file_and_one_line(monkeypatch):
     assert np.abs(rtl.astype(int) - img.astype(int))[cov].max() <= 1
     before, _, _ = S.model(plain)
     assert (img[cov].astype(int) <= before[cov]).all() and (img[cov] < before[cov]).any()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_register_slice_between_stages_keeps_the_stream(seed):
+    """``hdl.unit.skid``, the join of every two shading stages, under random stalls on both
+    sides: every item taken comes out once and in order, an offered output is held with its
+    payload until taken, and with nothing stalled an item is out the next clock, one a
+    clock. Its outputs and its input's ready are registers: each is checked not to move
+    within a clock when the other side's handshake changes."""
+    from types import SimpleNamespace
+    from amaranth.hdl import Module, Signal
+    from amaranth.sim import Simulator
+    from hdl.unit import skid
+
+    rng = np.random.default_rng(seed)
+    m = Module()
+    src = SimpleNamespace(valid=Signal(), ready=Signal(), payload=Signal(8))
+    dst = SimpleNamespace(valid=Signal(), ready=Signal(), payload=Signal(8))
+    busy = Signal()
+    m.d.comb += busy.eq(skid(m, "t", src, dst))
+    # the first 40 clocks with nothing stalled, then random stalls on both sides, then drain
+    offer = np.r_[np.ones(40), rng.random(400) < 0.7, np.zeros(20)].astype(int)
+    take = np.r_[np.ones(40), rng.random(400) < 0.6, np.ones(20)].astype(int)
+    sent, got, seen = [], [], []
+
+    async def bench(ctx):
+        nxt, last = 0, None
+        for t in range(len(offer)):
+            ctx.set(src.valid, int(offer[t]))
+            ctx.set(src.payload, nxt & 255)
+            ctx.set(dst.ready, 0)
+            regs = (ctx.get(src.ready), ctx.get(dst.valid), ctx.get(dst.payload))
+            ctx.set(dst.ready, int(take[t]))
+            assert (ctx.get(src.ready), ctx.get(dst.valid), ctx.get(dst.payload)) == regs
+            if last is not None:           # the output stalled a clock ago: held, unchanged
+                assert ctx.get(dst.valid) and ctx.get(dst.payload) == last
+            if ctx.get(src.valid) and ctx.get(src.ready):
+                sent.append((t, nxt & 255))
+                nxt += 1
+            last = None
+            if ctx.get(dst.valid):
+                if ctx.get(dst.ready):
+                    got.append((t, ctx.get(dst.payload)))
+                else:
+                    last = ctx.get(dst.payload)
+            seen.append(ctx.get(busy))
+            await ctx.tick()
+
+    sim = Simulator(m)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.run()
+    assert [p for _, p in got] == [p for _, p in sent] and len(sent) > 200
+    assert [t for t, _ in got[:39]] == [t + 1 for t, _ in sent[:39]]    # latency 1, 1 a clock
+    assert not seen[-1] and any(seen)
