@@ -39,6 +39,7 @@ import sys
 import time
 from pathlib import Path
 
+from hdl.span_unit.span import ROW_QUEUE
 from hdl.units import UNITS, make_unit
 
 from .verilog import BUILD, export
@@ -106,10 +107,11 @@ def drain_bound(unit):
     """Clocks from accepting the watched triangle (the last) to idle with ready held high,
     for triangles within ``BOX`` pixels: rows R <= BOX + 1, each at most BOX + 1 pixels wide.
     Ahead of it at most the triangle before it (the setup takes one only when the walker has
-    the one before: ``Raster``) and a full row queue (8 rows, plus the stepper's row and its
-    skid). So: the unit's latency (setup to first fragment, nothing waiting), the row engine's
-    clocks on the earlier triangle's rows and on the watched one's later rows ((2 R - 1) ii),
-    the stepper's backlog (10 rows) and the watched triangle's last row, one clock a pixel."""
+    the one before: ``Raster``) and a full row queue (``ROW_QUEUE`` rows, plus the stepper's
+    row and its skid). So: the unit's latency (setup to first fragment, nothing waiting), the
+    row engine's clocks on the earlier triangle's rows and on the watched one's later rows
+    ((2 R - 1) ii), the stepper's backlog (``ROW_QUEUE`` + 2 rows) and the watched
+    triangle's last row, one clock a pixel."""
     raster = unit if unit.NAME == "raster" else None
     shading = 0
     if raster is None:                         # a pipeline: the raster, then its stages
@@ -120,8 +122,8 @@ def drain_bound(unit):
     rows = width = BOX + 1
     misses = 0
     if unit.stream_ports:                      # each fragment may miss in the texel cache:
-        misses = (10 + 1) * width * (MEM_WAIT + 4) * len(unit.stream_ports) // 2
-    return raster.latency + (2 * rows - 1) * ii + (10 + 1) * width + shading + misses
+        misses = (ROW_QUEUE + 3) * width * (MEM_WAIT + 4) * len(unit.stream_ports) // 2
+    return raster.latency + (2 * rows - 1) * ii + (ROW_QUEUE + 3) * width + shading + misses
 
 
 def harness(unit, module, mutant=None, only=None, cut=False, valids=()):

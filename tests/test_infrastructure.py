@@ -161,7 +161,8 @@ def test_verilog_exports_lint_clean(name, tmp_path):
 def test_param_ranges_are_enforced_and_described():
     """The ranges ``sim units --json`` shows are the ones the constructors enforce (the
     rotation's asin table needs asin_bits <= trig_bits + 1, the raster's row_mults at most
-    channels + 1, its setup_serial a row_serial: set the other one to allow it)."""
+    its row engine's products a row, its setup_serial a row_serial: set the other one to
+    allow it)."""
     needs = {"trig_bits": {"asin_bits": 4}, "asin_bits": {"trig_bits": 16},
              "row_mults": {"channels": 12}, "setup_serial": {"row_serial": 1}}
     for name, cls in UNITS.items():

@@ -25,8 +25,8 @@ from ..setup_unit.formats import (MODES, flat_fields, fragment_fields, parse_gro
                                    parse_modes, triangle_fields)
 from ..setup_unit.setup import Setup
 from ..unit import Unit
-from .span import (Link, channel_engine, row_engine, row_engine_serial, row_queue,
-                   setup_queue, stepper, walker, walker_constants)
+from .span import (Link, channel_engine, row_engine, row_engine_serial, row_products,
+                   row_queue, setup_queue, stepper, walker, walker_constants)
 
 __all__ = ["Raster"]
 
@@ -66,9 +66,10 @@ class Raster(Unit):
             raise ValueError(f"row_mults={row_mults} and row_serial={row_serial}: the row "
                              f"engine is one or the other (row_mults=0 with row_serial)")
         self.groups = max(parse_groups(groups, channels)) + 1
-        if row_mults > channels + 1:          # sharing only: ii stays at or above the default's
-            raise ValueError(f"row_mults must be at most channels + 1 = {channels + 1} (0: "
-                             f"that many), not {row_mults}")
+        products = row_products(parse_modes(modes, channels))
+        if row_mults > products:           # fewer: shared, a longer row interval; more than
+            raise ValueError(f"row_mults must be at most the row engine's {products} products "
+                             f"a row (one each: a row a clock), not {row_mults}")
         if setup_ii:
             n, fits = _products(screen_bits, sub_bits, channels, modes, recip, recip_iters,
                                 groups)
