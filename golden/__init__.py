@@ -16,11 +16,12 @@ from typing import Callable
 
 import numpy as np
 
-from hdl.setup_unit.formats import EDGE, VALUE, edge_names, parse_groups
+from hdl.setup_unit.formats import EDGE, VALUE, edge_names, parse_groups, parse_precision
 
 from . import angular, fenney, raster, shade
 
-__all__ = ["MODELS", "Model", "TYPICAL_SIZE", "raster_hard_cases", "random_triangles"]
+__all__ = ["MODELS", "Model", "TYPICAL_SIZE", "raster_bounds", "raster_hard_cases",
+           "random_triangles"]
 
 
 @dataclass(frozen=True)
@@ -391,8 +392,8 @@ def _raster_vectors(rng, n, **params):
 
 def _raster_check(inp, out, **params):
     """Coverage and the flat words must match exactly (else every fragment counts as wrong);
-    values within one LSB of the float model of the same method (docs/quadratic.md derives
-    the widths)."""
+    values within one LSB of the float model of the same method, at each channel's
+    ``precision`` (docs/quadratic.md derives the widths)."""
     want = _raster_run(inp, **params)
     same = len(out["tri"]) == len(want["tri"]) and all(
         np.array_equal(np.asarray(out[k]), want[k]) for k in want if not k.startswith("v"))
@@ -400,10 +401,25 @@ def _raster_check(inp, out, **params):
     if not same:
         return {"coverage": (np.full(n, np.inf), np.zeros(n))}
     res = {"coverage": (np.zeros(n), np.zeros(n))}
+    bounds = raster_bounds(params.get("channels", 2), params.get("precision", "14"))
     for k in want:
         if k.startswith("v"):
-            res[k] = (np.abs(np.asarray(out[k], float) - want[k]), np.ones(len(want[k])))
+            res[k] = (np.abs(np.asarray(out[k], float) - want[k]),
+                      np.full(len(want[k]), bounds[int(k[1:])][1]))
     return res
+
+
+RASTER_INTERNAL = 2 ** -15.37   # the raster's error at FI, screens up to 1024 (docs/quadratic.md)
+
+
+def raster_bounds(channels, precision="14"):
+    """Each channel's LSB and its bound on |RTL - float model|, in VALUE's units (2**-14): half
+    an LSB of its ``p`` fraction bits (the output's rounding), the internal error at FI and
+    the floors to the channel's own FI, 2**-(p + 6) (``Widths.fi``; docs/quadratic.md "A
+    channel's precision"). Below one LSB at every p: 0.90 LSB at 14, 0.52 at 8."""
+    return [(2.0 ** (VALUE.frac_bits - p),
+             (2.0 ** -(p + 1) + RASTER_INTERNAL + 2.0 ** -(p + 6)) / VALUE.lsb)
+            for p in parse_precision(precision, channels)]
 
 
 MODELS = {

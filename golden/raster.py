@@ -12,7 +12,8 @@ inputs the RTL gets, saturated to the value format like the RTL.
 """
 import numpy as np
 
-from hdl.setup_unit.formats import EDGE, VALUE, edge_names, parse_groups, parse_modes
+from hdl.setup_unit.formats import (EDGE, VALUE, edge_names, parse_groups, parse_modes,
+                                   parse_precision)
 
 from . import quadratic as q
 
@@ -124,10 +125,10 @@ def sorted_triangles(inputs, channels, sub_bits, groups=1, real=None):
 
 
 def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", groups="0", flat=0,
-        real=None, **_):
+        real=None, precision="14", **_):
     """Fragments of every triangle: ``tri x y`` and ``v{k}`` (reals, saturated to the value
-    range), in the order the RTL emits them (by triangle, row, column); each channel with its
-    group's edge constants; the ``flat`` words ``f{k}`` of each fragment's triangle.
+    range, its top at the channel's ``precision``), in the order the RTL emits them (by
+    triangle, row, column); each channel with its group's edge constants; the ``flat`` words ``f{k}`` of each fragment's triangle.
     ``real``: the inputs before rounding (``sorted_triangles``): the same fragments, their
     values from the unrounded positions, vertex values and edge constants, unsaturated (the
     ideal model's)."""
@@ -143,8 +144,9 @@ def run(inputs, screen_bits=10, sub_bits=4, channels=2, modes="xshading", groups
     g = {k: st[k][tri] for k in ("x1", "y1", "x2", "y2")}
     with np.errstate(divide="ignore", invalid="ignore"):
         u, v = q.uv_of(g["x1"], g["y1"], g["x2"], g["y2"], X, Y)
-    lo, hi = (VALUE.min * VALUE.lsb, VALUE.max * VALUE.lsb) if real is None else (-np.inf, np.inf)
-    for ch, mode in enumerate(modes):
+    for ch, (mode, p) in enumerate(zip(modes, parse_precision(precision, channels))):
+        lo, hi = ((VALUE.min * VALUE.lsb, 2 - 2.0 ** -p) if real is None else
+                  (-np.inf, np.inf))
         I = [st["values"][ch][:, k] for k in range(3)]
         uv = channel_uv(mode, I, st["groups"][groups[ch]])
         out[f"v{ch}"] = np.clip(q.eval_uv(uv[tri], u, v), lo, hi)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from golden import MODELS, random_triangles, raster, raster_hard_cases
+from golden import MODELS, random_triangles, raster, raster_bounds, raster_hard_cases
 from hdl.units import ParamError, make_unit
 
 from .conftest import long_where, per_simulator, stream
@@ -17,7 +17,9 @@ GROUPS = {**SMALL, "channels": 2, "modes": "exact,xshading", "groups": "0,1", "f
 
 
 def check(inputs, out, params):
-    """Coverage identical to the model's, values within the 1-LSB bound; the worst error."""
+    """Coverage identical to the model's, values within the derived bound (below one LSB of
+    each channel's precision: ``raster_bounds``) and multiples of that LSB; the worst error,
+    in LSBs."""
     want = MODELS["raster"].run(inputs, **params)
     assert len(out["tri"]) == len(want["tri"]), \
         f"{len(out['tri'])} fragments, the coverage rule says {len(want['tri'])}"
@@ -30,10 +32,14 @@ def check(inputs, out, params):
         bad = np.flatnonzero(out[k] != want[k])
         assert not len(bad), f"fragment {bad[0]}: {k} = {out[k][bad[0]]}, not {want[k][bad[0]]}"
     worst = 0.0
+    bounds = raster_bounds(params["channels"], params["precision"])
     for k in want:
         if k.startswith("v"):
+            lsb, bound = bounds[int(k[1:])]
             err = np.abs(out[k] - want[k])
-            assert err.max(initial=0) <= 1.0, (k, int(np.argmax(err)), float(err.max()))
+            assert err.max(initial=0) <= bound, (k, int(np.argmax(err)), float(err.max()), bound)
+            assert not np.any(np.asarray(out[k]) % int(lsb)), f"{k} below its LSB"
+            err = err / lsb
             worst = max(worst, float(err.max(initial=0)))
     return worst
 
@@ -123,6 +129,21 @@ def test_more_row_multipliers_keep_the_contract():
     unit = make_unit("raster", spec=True, **params)
     assert unit.timing[1] == 3
     _keeps_the_contract(unit, params, 10, 0.7, 5)
+
+
+@pytest.mark.parametrize("params", [
+    {"channels": 3, "modes": "linear,xshading,exact", "precision": "14,8,4"},
+    {"channels": 3, "modes": "xshading,linear,xshading", "precision": "6,10,14", "row_serial": 3,
+     "setup_serial": 1}])
+def test_each_channel_keeps_its_own_precision(params):
+    """``precision``: a channel rounded to p fraction bits keeps Phi, d and 2A to
+    2 screen_bits + p + 6 (``Widths.fi``), so within one of its own LSBs (2**-p) of the float
+    model over the longest spans (docs/quadratic.md derives it), its values multiples of
+    that LSB; in the channels-in-turn engine too, where each job adds its own channel's
+    rounding half."""
+    params = {**SMALL, **params}
+    unit = make_unit("raster", spec=True, **params)
+    _keeps_the_contract(unit, params, 12, 0.7, 6)
 
 
 def _keeps_the_contract(unit, params, rng, p_ready, seed, simulator="amaranth"):

@@ -51,19 +51,27 @@ MODES = ("xshading", "exact", "linear")
 EXACT_G_MAX = 64.0   # exact mid-edges: 1/||Ni + Nj|| clamps here (normals within 0.9 deg of opposite)
 
 
-def parse_groups(groups, channels):
-    """``"0,0,1,1,1"`` -> a tuple, each channel's edge-constant group (one number applies to
-    all), numbered from 0 without gaps."""
-    if not isinstance(groups, str):
-        raise TypeError(f"groups must be a comma-separated string, not {groups!r}")
-    try:
-        out = tuple(int(g) for g in groups.split(","))
-    except ValueError:
-        raise ValueError(f"groups must be numbers, one per channel, not {groups!r}") from None
+def _per_channel(name, value, channels):
+    """``"a,b,c"`` -> a tuple of its stripped parts, one per channel (one part applies to
+    all); a ``TypeError``/``ValueError`` names ``name``."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a comma-separated string, not {value!r}")
+    out = tuple(p.strip() for p in value.split(","))
     if len(out) == 1:
         out = out * channels
     if len(out) != channels:
-        raise ValueError(f"groups names {len(out)} channel(s) but channels={channels}")
+        raise ValueError(f"{name} names {len(out)} channel(s) but channels={channels}")
+    return out
+
+
+def parse_groups(groups, channels):
+    """``"0,0,1,1,1"`` -> a tuple, each channel's edge-constant group (one number applies to
+    all), numbered from 0 without gaps."""
+    parts = _per_channel("groups", groups, channels)
+    try:
+        out = tuple(int(g) for g in parts)
+    except ValueError:
+        raise ValueError(f"groups must be numbers, one per channel, not {groups!r}") from None
     if sorted(set(out)) != list(range(max(out) + 1)):
         raise ValueError(f"groups must be numbered 0, 1, ... without gaps, not {groups!r}")
     return out
@@ -71,14 +79,24 @@ def parse_groups(groups, channels):
 
 def parse_modes(modes, channels):
     """``"xshading,linear"`` -> a tuple, one mode per channel (one name applies to all)."""
-    if not isinstance(modes, str):
-        raise TypeError(f"modes must be a comma-separated string, not {modes!r}")
-    out = tuple(m.strip() for m in modes.split(","))
-    if len(out) == 1:
-        out = out * channels
-    if len(out) != channels:
-        raise ValueError(f"modes names {len(out)} channel(s) but channels={channels}")
+    out = _per_channel("modes", modes, channels)
     bad = [m for m in out if m not in MODES]
     if bad:
         raise ValueError(f"unknown mode {bad[0]!r}; modes are {', '.join(MODES)}")
     return out
+
+
+# A channel's output precision: the fraction bits it is rounded to (its value stays in
+# ``VALUE``, the bits below it zero), 1 to VALUE's 14; the raster's internal widths follow
+# (``Widths.fi``; docs/quadratic.md "A channel's precision").
+PRECISIONS = tuple(str(p) for p in range(1, VALUE.frac_bits + 1))
+
+
+def parse_precision(precision, channels):
+    """``"14,8,8"`` -> a tuple of ints, each channel's fraction bits (one applies to all)."""
+    out = _per_channel("precision", precision, channels)
+    bad = [p for p in out if p not in PRECISIONS]
+    if bad:
+        raise ValueError(f"precision must be fraction bits from 1 to {VALUE.frac_bits}, one "
+                         f"per channel, not {bad[0]!r}")
+    return tuple(int(p) for p in out)

@@ -54,6 +54,13 @@ class Widths:
     def FI(self):                      # Phi, its first difference and 2A in the stepper
         return 2 * self.screen_bits + 20
 
+    def fi(self, precision):
+        """FI for a channel rounded to ``precision`` fraction bits (FI at VALUE's 14): the
+        row queue and the stepper keep Phi, d and 2A floored to it, 2 screen_bits + p + 6
+        bits, which adds at most 2**-(p + 6) over a span of 2**screen_bits pixels
+        (docs/quadratic.md "A channel's precision")."""
+        return self.FI - (VALUE.frac_bits - precision)
+
     @property
     def wc(self):                      # vertex coordinate width (sub-pixel units)
         return self.screen_bits + 2 + self.sub_bits

@@ -21,8 +21,8 @@ from amaranth.hdl import Const, Fragment, Module, Signal
 from amaranth.lib.wiring import Out
 
 from ..sched import Schedule
-from ..setup_unit.formats import (MODES, flat_fields, fragment_fields, parse_groups,
-                                   parse_modes, triangle_fields)
+from ..setup_unit.formats import (MODES, PRECISIONS, flat_fields, fragment_fields,
+                                   parse_groups, parse_modes, parse_precision, triangle_fields)
 from ..setup_unit.setup import Setup
 from ..unit import Unit
 from .span import (Link, channel_engine, row_engine, row_engine_serial, row_products,
@@ -38,7 +38,7 @@ class Raster(Unit):
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
               "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0,
               "setup_mults": 1, "row_mults": 0, "setup_ii": 0, "setup_narrow": 0,
-              "row_serial": 0, "setup_serial": 0}
+              "row_serial": 0, "setup_serial": 0, "precision": "14"}
     RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
               "recip": ("newton", "divide"), "recip_iters": (0, 3),
               "groups": None,     # a string: parse_groups checks it
@@ -48,14 +48,16 @@ class Raster(Unit):
               "setup_ii": (0, 255),      # clocks between triangles in the setup; 0: one at a time
               "setup_narrow": (0, 6),    # the setup's 18 x 18 multipliers (one MULT18X18D each)
               "row_serial": (0, 9),      # >0: the row engine's channels in turn on this many
-              "setup_serial": (0, 3)}    # >0: the setup's channels in turn on this many
-    PER_CHANNEL = ("modes", "groups")
+              "setup_serial": (0, 3),    # >0: the setup's channels in turn on this many
+              "precision": PRECISIONS}   # each channel's fraction bits out (VALUE's 14 or fewer)
+    PER_CHANNEL = ("modes", "groups", "precision")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
     def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups,
                  flat, setup_mults, row_mults, setup_ii, setup_narrow, row_serial,
-                 setup_serial):
+                 setup_serial, precision):
         parse_modes(modes, channels)
+        self.precision = parse_precision(precision, channels)
         if setup_serial and (not row_serial or setup_ii or "exact" in parse_modes(modes,
                                                                                  channels)):
             raise ValueError(f"setup_serial={setup_serial} needs row_serial > 0 (its jobs read "
@@ -170,17 +172,18 @@ class Raster(Unit):
         if self.params["row_serial"]:
             writes, started, written, re = row_engine_serial(
                 m, w, setup.modes, rows, rows_in, space, platform, flat,
-                self.params["row_serial"], consts)
+                self.params["row_serial"], consts, self.precision)
             re_ii, re_length, re_busy = re["ii"], re["length"], re["busy"]
         else:
             rows, early, re, written = row_engine(m, w, setup.modes, rows, rows_in, space,
                                                   platform, flat,
-                                                  self.params["row_mults"] or ch + 1)
+                                                  self.params["row_mults"] or ch + 1,
+                                                  self.precision)
             writes = [("row_queue", rows, written, None), ("row_queue_early", early, re.start,
                                                           None)]
             started, re_ii, re_length, re_busy = re.start, re.ii, re.length, re.busy()
         rows, queued, take = row_queue(m, writes, started, written, space)
-        cur = stepper(m, w, ch, rows, queued, take, self.o, flat)
+        cur = stepper(m, w, ch, rows, queued, take, self.o, flat, self.precision)
         busy = (cur | self.o.valid | walking | rows_in.valid | written | queued | pending
                 | re_busy)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]

@@ -170,7 +170,8 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, fla
     return {**buf, **held}, have
 
 
-def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None):
+def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None,
+               precision=None):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
@@ -178,8 +179,12 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     Phi = f + u d + v e and d = P0). The engine never stalls: a row starts only when
     ``space`` (a register of the row queue) promises a place for it. Returns the row values
     for the stepper (computed, and ``early``: what the engine only carries, which the row
-    queue takes at the row's start), the schedule and the output's valid bit."""
+    queue takes at the row's start), the schedule and the output's valid bit. ``precision``:
+    each channel's fraction bits out; its Phi, d and 2A go into the queue floored to
+    ``w.fi`` of it."""
     channels = len(modes)
+    precision = precision or (VALUE.frac_bits,) * channels
+    cut = [VALUE.frac_bits - p for p in precision]     # bits below the channel's FI
     mults = mults or channels + 1
     ii = -(-row_products(modes) // mults)
     out_valid = Signal(name="re_out_valid")
@@ -190,8 +195,8 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     # linear channel's d = P0) goes to the row queue as the row starts, not through a copy
     # for each row in flight (over the engine's length, 6 copies of each 2A at the default)
     early = {k: rows[k] for k in ("j", "tri", *flat)}
-    early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] for ch in range(channels)})
-    early.update({f"d{ch}": rows[f"c{ch}_p0"] for ch, mode in enumerate(modes)
+    early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] >> cut[ch] for ch in range(channels)})
+    early.update({f"d{ch}": rows[f"c{ch}_p0"] >> cut[ch] for ch, mode in enumerate(modes)
                   if mode == "linear"})
     carried = {"j", "tri", *flat, *(f"c{ch}_a2" for ch in range(channels)),
                *(f"c{ch}_p0" for ch, mode in enumerate(modes) if mode == "linear")}
@@ -250,7 +255,9 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
             out[f"d{ch}"] = sc.let(f"d{ch}", end_vals["p0"] + puv, after=k)
         out[f"phi{ch}"] = sc.let(f"phi{ch}", (end_vals["f"] << (w.FI - w.FO)) + uvt, after=k)
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
-    out = _outputs(sc, w, v, out, [f"phi{ch}" for ch in range(channels)], end)
+    out = _outputs(sc, w, v, out, end, {f"phi{ch}": _half(w, p) for ch, p in
+                                        enumerate(precision)},
+                   {f"{k}{ch}": cut[ch] for ch in range(channels) for k in ("phi", "d")})
     m.d.sync += out_valid.eq(sc.at(end))
     sc.finish()
     sc.check()
@@ -258,7 +265,7 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
 
 
 def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=3,
-                      consts=None):
+                      consts=None, precision=None):
     """The row engine with its channels in turn: one datapath, on ``mults`` shared
     multipliers, evaluates one channel of one row per job, a job every ``ii`` clocks, so a
     further channel costs clocks per row (``ii`` each) and a share of the operand
@@ -271,9 +278,12 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     channel's start, so it and the triangle's constants stay steady while the jobs read
     them. ``consts``: the channel-constant memory of ``channel_engine`` and the slot the
     walker reads (``(consts, slot)``), read at the next job's channel in place of the
-    walker's registers. Returns the writes into the row queue (``(name, values, enable,
-    slot)``), the last job's start (the queue's credit), its write, and the timing."""
+    walker's registers. ``precision``: as :func:`row_engine`'s (a job's rounding half is its
+    channel's). Returns the writes into the row queue (``(name, values, enable, slot)``), the
+    last job's start (the queue's credit), its write, and the timing."""
     channels = len(modes)
+    precision = precision or (VALUE.frac_bits,) * channels
+    cut = [VALUE.frac_bits - p for p in precision]
     quad = any(mode != "linear" for mode in modes)
     ii = -(-(9 if quad else 4) // mults)
     sc = Schedule(m, "rs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
@@ -315,18 +325,22 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
          if quad else v["p0"])
     phi = sc.apply("phi", lambda f, x: (f << (w.FI - w.FO)) + x, v["f"], uvt)
     end = sc._when(phi, d)
-    out = _outputs(sc, w, v, {"phi": phi, "d": d}, ["phi"], end)
+    halves = sorted(set(precision))
+    half = (_half(w, halves[0]) if len(halves) == 1 else      # the job's channel's
+            (v["sel"], lambda sel: _or_tree([Mux(sel[c], _half(w, p), 0)
+                                             for c, p in enumerate(precision)])))
+    out = _outputs(sc, w, v, {"phi": phi, "d": d}, end, {"phi": half})
     at = end + 1                               # the outputs' registers are valid
     addr, chan = sc.late(v["slot"], at), sc.late(v["sel"], at)
     sc._read(at, addr, chan)
     en = sc.at(at)
-    writes = [(f"row_queue_c{c}", {f"phi{c}": out["phi"], f"d{c}": out["d"]}, en & chan[c],
-               addr) for c in range(channels)]
+    writes = [(f"row_queue_c{c}", {f"phi{c}": out["phi"] >> cut[c], f"d{c}": out["d"] >> cut[c]},
+               en & chan[c], addr) for c in range(channels)]
     last = Signal(name="rs_written")
     m.d.comb += last.eq(en & chan[-1])
     writes.append(("row_queue", {k: out[k] for k in ("xs", "xe", "some", "one")}, last, addr))
     early = {k: rows[k] for k in ("j", "tri", *flat)}
-    early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] for ch in range(channels)})
+    early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] >> cut[ch] for ch in range(channels)})
     writes.append(("row_queue_early", early, started, slot))
     sc.finish()
     sc.check()
@@ -352,12 +366,26 @@ def _uv(sc, w, v):
             sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True))
 
 
-def _outputs(sc, w, v, vals, phis, end):
+def _half(w, precision):
+    """Half an LSB of a channel rounded to ``precision`` fraction bits, at FI."""
+    return 1 << (w.FI - precision - 1)
+
+
+def _outputs(sc, w, v, vals, end, halves, cuts=None):
     """The row engine's outputs registered at ``end``; what the stepper would otherwise
     compute from the queue's RAM on its way into a register is computed here: the rounding
-    half in each of ``phis``, and the span's tests (empty, one pixel)."""
-    half = 1 << (w.FI - VALUE.frac_bits - 1)
-    fns = {k: ((lambda r: r + half) if k in phis else (lambda r: r), x) for k, x in vals.items()}
+    half in each Phi (``halves``: a constant, or ``(register, function of it)``), the
+    floors to a channel's FI (``cuts``: bits dropped), and the span's tests (empty, one
+    pixel)."""
+    cuts = cuts or {}
+    fns = {}
+    for k, x in vals.items():
+        half, k_cut = halves.get(k, 0), cuts.get(k, 0)
+        if isinstance(half, tuple):
+            reg, of = half
+            fns[k] = ((lambda r, h, of=of, c=k_cut: (r + of(h)) >> c), x, reg)
+        else:
+            fns[k] = ((lambda r, h=half, c=k_cut: (r + h) >> c if h else r >> c), x)
     fns.update({k: (lambda r: r, v[k]) for k in ("xs", "xe")})
     fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
     fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
@@ -546,19 +574,22 @@ def setup_queue(m, sc, values, space, take, current=(), depth=15):
     return out, valid, valid_next, held, offset
 
 
-def stepper(m, w, channels, rows, rows_valid, rows_take, o, flat=()):
-    """One fragment per clock from the rows: Phi += d, d += 2A per pixel and channel; the
-    fragment registered (rounded and saturated) on its way out. Returns its busy bit."""
-    acc_bits = w.FI + 9                        # Phi and d wrap modulo 2**acc_bits: only
-    cur, last = Signal(), Signal()              # emitted values must fit: |Phi| < 128
+def stepper(m, w, channels, rows, rows_valid, rows_take, o, flat=(), precision=None):
+    """One fragment per clock from the rows: Phi += d, d += 2A per pixel and channel, each
+    channel at its own FI (``w.fi`` of its ``precision``); the fragment registered (rounded
+    and saturated) on its way out, a value of ``precision`` fraction bits in ``VALUE``.
+    Returns its busy bit."""
+    precision = precision or (VALUE.frac_bits,) * channels
+    # Phi and d wrap modulo 2**acc_bits: only emitted values must fit: |Phi| < 128
+    acc_bits = [w.fi(p) + 9 for p in precision]
+    cur, last = Signal(), Signal()
     data = lambda shape, name: Signal(shape, name=name, reset_less=True)   # no reset: valid
     x, xe = data(w.screen_bits + 1, "st_x"), data(w.screen_bits + 1, "st_xe")  # bits have it
     y, tri = data(w.screen_bits, "st_y"), data(len(rows["tri"]), "st_tri")
     const = {k: data(len(rows[k]), f"st_{k}") for k in flat}   # the triangle's flat words
-    phi = [data(acc_bits, f"st_phi{ch}") for ch in range(channels)]
-    d = [data(acc_bits, f"st_d{ch}") for ch in range(channels)]
-    a2 = [data(acc_bits, f"st_a2_{ch}") for ch in range(channels)]
-    shift = w.FI - VALUE.frac_bits
+    phi = [data(acc_bits[ch], f"st_phi{ch}") for ch in range(channels)]
+    d = [data(acc_bits[ch], f"st_d{ch}") for ch in range(channels)]
+    a2 = [data(acc_bits[ch], f"st_a2_{ch}") for ch in range(channels)]
     # A one-fragment skid buffer beside the output register: the stepper emits while the
     # skid is empty (``room``, a register), so its few hundred enables wait on no handshake
     # from outside; a fragment emitted while the output register is held goes to the skid,
@@ -582,9 +613,10 @@ def stepper(m, w, channels, rows, rows_valid, rows_take, o, flat=()):
             m.d.sync += [phi[ch].eq(phi[ch] + d[ch]), d[ch].eq(d[ch] + a2[ch])]
     emit = cur & room
     frag = {"tri": tri, "x": x, "y": y, **const}
-    for ch in range(channels):
-        val = phi[ch].as_signed() >> shift
-        frag[f"v{ch}"] = Mux(val > VALUE.max, VALUE.max, Mux(val < VALUE.min, VALUE.min, val))
+    for ch, p in enumerate(precision):          # saturated to [-2, 2) at p fraction bits
+        val = phi[ch].as_signed() >> (w.fi(p) - p)
+        top, low = (1 << (p + 1)) - 1, -(1 << (p + 1))
+        frag[f"v{ch}"] = Mux(val > top, top, Mux(val < low, low, val)) << (VALUE.frac_bits - p)
     skid = {k: Signal.like(o.payload[k], name=f"st_skid_{k}", reset_less=True) for k in frag}
     free = ~o.valid | o.ready                   # the output register is free
     with m.If(free):
