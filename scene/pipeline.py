@@ -65,6 +65,7 @@ class ScenePipeline(Unit):
               "setup_ii": 0, "setup_narrow": 0,     # its setup's interval, 18 x 18 multipliers
               "row_serial": 0,                      # its row engine's channels in turn
               "setup_serial": 0,                    # its setup's channels in turn
+              "vector_bits": 14,                    # its vector channels' fraction bits
               "bump": "none", "bump_size": 256, "texture": "external",
               "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
               "rsqrt_bits": 12,
@@ -80,6 +81,7 @@ class ScenePipeline(Unit):
               "setup_narrow": RasterUnit.RANGES["setup_narrow"],
               "row_serial": RasterUnit.RANGES["row_serial"],
               "setup_serial": RasterUnit.RANGES["setup_serial"], "rsqrt_iters": (1, 3),
+              "vector_bits": (4, VALUE.frac_bits),
               "bump": BUMPS,
               "bump_size": (16, MAX_TEXTURE), "filter": FILTERS,
               "trig_bits": (4, 16), "rotation": ("paper", "exact"),
@@ -206,7 +208,8 @@ def choose(q):
         raise ValueError(f"lights: {q['lights']} lights need {len(channels)} raster channels "
                          f"({', '.join(n for n, _, _ in channels)}); the raster has at most "
                          f"{MAX_CHANNELS}")
-    stages[0].join(channels, [w for stage in stages for w in stage.flat])
+    bits = {n: b for stage in stages for n, b in stage.channel_bits.items()}
+    stages[0].join(channels, [w for stage in stages for w in stage.flat], bits)
     return stages
 
 

@@ -5,7 +5,9 @@ A stage subclasses :class:`Stage` and supplies
 - ``when`` (the parameters' values that call for it), or ``wanted(q)``: whether a scene
   (the pipeline's parameters ``q``) calls for it;
 - ``name``: its submodule's name in the composed top, and its unit's in ``metrics.json``;
-- ``channels``: the raster channels it reads, ``(name, mode, group)``;
+- ``channels``: the raster channels it reads, ``(name, mode, group)``; ``channel_bits``:
+  the fraction bits it needs of some of them (``{name: bits}``; the rest keep VALUE's 14),
+  the raster's ``precision``;
   ``flat``: the names of the flat words (a triangle's constants) it reads from the raster;
 - ``uniforms``: the registers it reads (the host writes them: ``scene/host.py``), and
   ``uniform_values(scene, L, H)``: their raw values for a scene (``L``, ``H``: each light's
@@ -45,6 +47,7 @@ class Stage:
     name = None
     bump = False           # a bump stage: texel fetch to N.L and N.H
     channels = ()
+    channel_bits = {}
     flat = ()
     uniforms = ()
     params = {}

@@ -140,7 +140,7 @@ def cmd_render(args):
 
 
 RASTER_KNOBS = ("setup_ii", "setup_mults", "setup_narrow", "row_mults", "row_serial",
-                "setup_serial", "recip", "recip_iters")
+                "setup_serial", "vector_bits", "recip", "recip_iters")
 
 
 def _raster_knobs(text):
@@ -280,7 +280,8 @@ def main(argv=None):
                         "setup; 0, the default: one at a time), setup_mults, setup_narrow "
                         "(its 35 x 35 and 18 x 18 multipliers), row_mults, row_serial (the row "
                         "engine's channels in turn on N multipliers), setup_serial (the "
-                        "setup's channels in turn on N more; needs row_serial), recip, recip_iters "
+                        "setup's channels in turn on N more; needs row_serial), vector_bits (the "
+                        "fraction bits of fenney_xz's vector channels, 4-14), recip, recip_iters "
                         "(docs/quadratic.md); e.g. setup_ii=16,setup_mults=2,setup_narrow=2")
     p = sub.add_parser("check", help="golden vectors through the RTL, or your outputs against "
                                      "golden; one verdict per unit")

@@ -15,8 +15,9 @@ fenney_xz's bound: the colour is monotonic in d and in s (coefficients >= 0, the
 increase), so every RTL colour must lie between the model's colours at the least and the
 largest d and s (per light and vector) over
 - the texture coordinates' raw values -1, 0, +1 (as above; bilinear weights move with them);
-- each component of the interpolated vector -1, 0, +1 in its raw value (the raster's LSB),
-  which can move its rounding to the patent's s8;
+- each component of the interpolated vector -1, 0, +1 in its raw value (the raster's LSB; at
+  ``vector_bits`` p, -2**(14 - p), 0, +2**(14 - p)), which can move its rounding to the
+  patent's s8;
 - the dot product's X -1, 0, +1: fenney_dot is within ``golden.fenney.dot_bound`` (below one
   LSB) of the float, the model rounds.
 
@@ -99,8 +100,9 @@ def _xz_interval(prep, ch):
     lo, hi = {}, {}
     lanes = [f"{t}{k}" for t, k in prep["bump"]["lanes"]]
     keys = [("d" if t == "l" else "s") + str(k) for t, k in prep["bump"]["lanes"]]
+    lsb = 1 << (14 - prep["params"]["vector_bits"])     # the vector channels' raw LSB
     for ds, dt in itertools.product((-1, 0, 1), repeat=2):
-        for dl in itertools.product((-1, 0, 1), repeat=3):
+        for dl in itertools.product((-lsb, 0, lsb), repeat=3):
             out = S.bump_model(prep, None, ch, ds=ds, dt=dt, dl={lane: dl for lane in lanes})
             for key, val in ((k, out[k]) for k in keys):
                 lo[key] = np.minimum(lo.get(key, val), val)
@@ -157,6 +159,32 @@ def test_xz_scene_rtl_within_bound(filter, light):
     if filter == "nearest":
         model = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
         assert (np.abs(rtl - model.astype(int)).max(-1) > 1).mean() < 0.01
+
+
+@VERILATOR
+@pytest.mark.xdist_group("verilator-scene-xz-vector-bits")
+def test_xz_scene_with_fewer_vector_bits_within_bound():
+    """``vector_bits = 8``: the raster rounds L''s components to 8 fraction bits (the patent's
+    s8 takes 7), its Phi, d and 2A kept 6 bits shorter; every fragment's colour within the
+    interval of the test above with the components' LSB 2**-8, under a slow memory."""
+    prep = S.prepare(S.parse({**SMALL, "bump": {"method": "fenney_xz", "filter": "bilinear",
+                                                "map": "tests/data/xz_edges.npz"},
+                              "shading": {"specular": False}}, "bump_test"),
+                     {"vector_bits": 8})
+    assert prep["params"]["vector_bits"] == 8
+    raster = prep["pipeline"].raster.params
+    assert raster["precision"] == ",".join(["14"] * 3 + ["8"] * 3)   # depth, s, t; L'
+    out = _rtl(prep, 40, 0.6, p_ready=0.7, seed=6)
+    frag, ch = S.model_fragments(prep)
+    assert len(out["x"]) == len(frag["x"]) > 500
+    assert not np.any(np.rint(ch["l0x"] * 2.0 ** 8) - ch["l0x"] * 2.0 ** 8)   # 8 bits
+    rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
+    lo, hi = _xz_interval(prep, ch)
+    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
+    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
+    bad = np.flatnonzero(((rtl < c_lo) | (rtl > c_hi)).any(-1))
+    assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
+                          f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
 
 
 def test_xz_flat_map_gives_the_unbumped_surface():

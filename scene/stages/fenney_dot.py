@@ -23,6 +23,12 @@ class FenneyDot(Stage):
                 for a in "xyz"]
 
     @property
+    def channel_bits(self):
+        """The vectors' components, rounded to s8 here: ``vector_bits`` of them are enough
+        (the pipeline's knob; 14, all of VALUE, by default)."""
+        return {name: self.q["vector_bits"] for name, _, _ in self.channels}
+
+    @property
     def params(self):
         """The patent's plain dot product, or the bump vector renormalised (the scene's
         ``bump.renormalize``; ``make tradeoffs`` also sweeps it as a hardware choice)."""

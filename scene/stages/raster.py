@@ -4,7 +4,7 @@ instantiates it and names its outputs for the stages after it (``rename``)."""
 import numpy as np
 
 from golden import raster as raster_model
-from hdl.setup_unit.formats import MODES
+from hdl.setup_unit.formats import MODES, VALUE, parse_precision
 from hdl.shade_unit.formats import light_fields
 from hdl.span_unit import Raster as RasterUnit
 
@@ -25,9 +25,10 @@ class Raster(Stage):
                                                                     "d", "s")]
         return own
 
-    def join(self, channels, flat):
-        """The channels of every stage (``(name, mode, group)``, this one's first) and their
-        flat words: the raster's parameters."""
+    def join(self, channels, flat, bits=None):
+        """The channels of every stage (``(name, mode, group)``, this one's first), their
+        flat words and the fraction bits some of them need (``{name: bits}``, the rest 14):
+        the raster's parameters."""
         q = self.q
         self.all_channels, self.flat_names = channels, flat
         self.params = dict(screen_bits=q["screen_bits"], sub_bits=q["sub_bits"],
@@ -37,6 +38,9 @@ class Raster(Stage):
                  "setup_serial")
         self.params.update({k: q[k] for k in knobs
                             if q[k] != RasterUnit.PARAMS[k]})      # defaults: Verilog unchanged
+        precision = [(bits or {}).get(n, VALUE.frac_bits) for n, _, _ in channels]
+        if min(precision) < VALUE.frac_bits:
+            self.params["precision"] = ",".join(map(str, precision))
         if any(g for _, _, g in channels):
             self.params["groups"] = ",".join(str(g) for _, _, g in channels)
         if flat:
@@ -69,6 +73,10 @@ class Raster(Stage):
         channels, reals; the flat words, integers). ``real``: from the unrounded inputs."""
         frag = raster_model.run(prep["inputs"], **self.params, real=real)
         ch = {name: frag[f"v{k}"] for k, (name, _, _) in enumerate(self.all_channels)}
+        bits = parse_precision(self.params.get("precision", "14"), len(self.all_channels))
+        for (name, _, _), p in zip(self.all_channels, bits):
+            if real is None and p < VALUE.frac_bits:     # the RTL's format: p bits, rounded
+                ch[name] = np.floor(ch[name] * 2.0 ** p + 0.5) / 2.0 ** p
         ch.update({name: np.asarray(frag[f"f{k}"]) for k, name in enumerate(self.flat_names)})
         return frag, ch
 
