@@ -114,10 +114,12 @@ def configurations(quick=False, knobs=None):
     for label, hw in (("one at a time", {}),
                       ("27, 2 wide", {"setup_ii": 27, "setup_mults": 2}),
                       ("16, 2 wide + 2 narrow", {"setup_ii": 16, "setup_mults": 2,
-                                                 "setup_narrow": 2})):
+                                                 "setup_narrow": 2}),
+                      ("16, 2 wide + 2 narrow, 6 row multipliers",     # the dense torus at 0.54
+                       {"setup_ii": 16, "setup_mults": 2, "setup_narrow": 2, "row_mults": 6})):
         rows.append(_row("setup interval", label, raster(**hw), scene="default",
                          hardware=hw, unit=unit_raster(**hw), default=not hw))
-    for n in (0, 2, 3):
+    for n in (0, 2, 3, 5, 6):                  # 5, 6: more than one a channel, a row in 4, 3
         hw = {"row_mults": n}
         rows.append(_row("row multipliers", "one per channel + 1" if n == 0 else str(n),
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
@@ -133,6 +135,12 @@ def configurations(quick=False, knobs=None):
         hw = {"row_serial": 3, "setup_serial": n}
         rows.append(_row("setup channels", f"in turn, {n} multiplier{'s' * (n > 1)} (row 3)",
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw)))
+    # a channel's precision: fenney_xz's vector channels (six of its nine) rounded to fewer
+    # fraction bits, their Phi, d and 2A kept that much shorter (the patent's s8 takes 7)
+    for bits in (14, 10, 8):
+        hw = {"vector_bits": bits}
+        rows.append(_row("vector bits", str(bits), [_scene_parts("bump_xz", hw)[0]],
+                         scene="bump_xz", hardware=hw, default=bits == 14))
     # the rotation: method (the exact one's CORDIC iterations), angle bits, table address bits
     for label, p, scene in (("paper", {}, "bump_angular"),
                             ("exact", {"method": "exact"}, "bump_angular_exact"),
