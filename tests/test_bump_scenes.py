@@ -112,6 +112,19 @@ def _xz_interval(prep, ch):
             {k: np.minimum(v + step, 1023 * step) for k, v in hi.items()})
 
 
+def _within_interval(prep, ch, out, interval):
+    """Every RTL colour between the model's at the ends of ``interval`` (``(lo, hi)``: the
+    least and largest of each lane's values); the RTL's colours."""
+    rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
+    lo, hi = interval
+    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
+    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
+    bad = np.flatnonzero(((rtl < c_lo) | (rtl > c_hi)).any(-1))
+    assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
+                          f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
+    return rtl
+
+
 @VERILATOR
 @pytest.mark.parametrize("filter,light", [
     # the nearest filter is a model of its own: make soak (nearest is tested on fenney_polar)
@@ -149,13 +162,7 @@ def test_xz_scene_rtl_within_bound(filter, light):
         invalid = fenney.texel_decode(x, z)["invalid"].astype(bool)
         assert invalid.sum() > 50 and (~invalid).sum() > 50      # both kinds, many of each
         assert ((x == 255) | (z == 255)).any()
-    rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
-    lo, hi = _xz_interval(prep, ch)
-    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
-    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
-    bad = np.flatnonzero(((rtl < c_lo) | (rtl > c_hi)).any(-1))
-    assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
-                          f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
+    rtl = _within_interval(prep, ch, out, _xz_interval(prep, ch))
     if filter == "nearest":
         model = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
         assert (np.abs(rtl - model.astype(int)).max(-1) > 1).mean() < 0.01
@@ -178,13 +185,7 @@ def test_xz_scene_with_fewer_vector_bits_within_bound():
     frag, ch = S.model_fragments(prep)
     assert len(out["x"]) == len(frag["x"]) > 500
     assert not np.any(np.rint(ch["l0x"] * 2.0 ** 8) - ch["l0x"] * 2.0 ** 8)   # 8 bits
-    rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
-    lo, hi = _xz_interval(prep, ch)
-    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
-    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
-    bad = np.flatnonzero(((rtl < c_lo) | (rtl > c_hi)).any(-1))
-    assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
-                          f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
+    _within_interval(prep, ch, out, _xz_interval(prep, ch))
 
 
 def test_xz_flat_map_gives_the_unbumped_surface():
@@ -264,13 +265,7 @@ def test_angular_scene_rtl_within_bound(rotation, light):
     assert len(out["x"]) == len(frag["x"]) > 500
     for key in ("tri", "x", "y"):
         np.testing.assert_array_equal(out[key], frag[key])
-    rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
-    lo, hi = _angular_interval(prep, ch)
-    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
-    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
-    bad = np.flatnonzero(((rtl < c_lo) | (rtl > c_hi)).any(-1))
-    assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
-                          f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
+    _within_interval(prep, ch, out, _angular_interval(prep, ch))
 
 
 def test_angular_flat_map_gives_the_unbumped_surface():
