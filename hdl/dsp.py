@@ -10,9 +10,13 @@ are written behaviourally, so both forms are cycle-for-cycle the same.
 
 The FPGA flow hands :class:`Target` to ``elaborate(platform)``; a design asks :func:`ecp5`.
 """
+from contextlib import contextmanager
+from contextvars import ContextVar
+
 from amaranth.hdl import ClockSignal, Const, Instance, Mux, Signal, Value, signed
 
-__all__ = ["Target", "ecp5", "mult18", "soft_mult", "soft_halves", "Product"]
+__all__ = ["Target", "ecp5", "mult18", "soft_mult", "soft_halves", "soft_as_mul",
+           "Product"]
 
 
 class Target:
@@ -61,6 +65,22 @@ def mult18(m, name, a, b, en, platform):
     return p
 
 
+_SOFT_AS_MUL = ContextVar("soft_as_mul", default=False)
+
+
+@contextmanager
+def soft_as_mul():
+    """Within it, :func:`soft_mult` is written as ``a * b`` (the same function: tests/test_fpga.py
+    checks the adders against it exhaustively), so that the formal flow's product stand-in
+    (``sim.formal.MUL_STANDIN``) replaces it too, instead of the solver reasoning through the
+    adder tree (fenney_polar's ``order`` proof: docs/formal.md)."""
+    token = _SOFT_AS_MUL.set(True)
+    try:
+        yield
+    finally:
+        _SOFT_AS_MUL.reset(token)
+
+
 def soft_mult(a, b):
     """``a * b`` in logic, not a DSP: the partial products of the narrower operand's bits
     (each the other operand shifted, or 0), summed as a balanced tree of adders. For the small
@@ -72,11 +92,14 @@ def soft_mult(a, b):
         a, b = b, a
     if a.shape().signed:
         raise ValueError("soft_mult: the narrower operand must be unsigned")
-    terms = [Mux(a[i], b << i, 0) for i in range(len(a))]
-    while len(terms) > 1:
-        terms = [terms[k] + terms[k + 1] if k + 1 < len(terms) else terms[k]
-                 for k in range(0, len(terms), 2)]
-    product = terms[0][:len(a) + len(b)]
+    if _SOFT_AS_MUL.get():
+        product = (a * b)[:len(a) + len(b)]
+    else:
+        terms = [Mux(a[i], b << i, 0) for i in range(len(a))]
+        while len(terms) > 1:
+            terms = [terms[k] + terms[k + 1] if k + 1 < len(terms) else terms[k]
+                     for k in range(0, len(terms), 2)]
+        product = terms[0][:len(a) + len(b)]
     return product.as_signed() if b.shape().signed else product
 
 

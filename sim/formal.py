@@ -39,6 +39,7 @@ import sys
 import time
 from pathlib import Path
 
+from hdl.dsp import soft_as_mul
 from hdl.span_unit.span import ROW_QUEUE
 from hdl.units import UNITS, make_unit
 
@@ -455,7 +456,8 @@ def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=No
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
     unit = make_unit(unit_name, spec=True, **params)
-    export(unit_name, params, out_dir=work, module=module)
+    with soft_as_mul():           # soft products as $mul, so the stand-in takes them too
+        export(unit_name, params, out_dir=work, module=module)
     only = mutant_property(mutant, unit) if mutant else only
     cut = is_multi(unit)              # the raster's products free: see _many and sby_text
     valids = () if cut else stage_valids((work / f"{module}.v").read_text(), module)

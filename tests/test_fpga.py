@@ -12,7 +12,7 @@ from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 
 from golden.fenney import texel_decode
-from hdl.dsp import Target, mult18, soft_halves, soft_mult
+from hdl.dsp import Target, mult18, soft_as_mul, soft_halves, soft_mult
 from hdl.units import make_unit
 from sim.fpga import SerialWrapper, markdown, run
 from sim.simulators import available
@@ -88,12 +88,15 @@ def test_soft_products_are_exact(wa, wb, signed_b):
     """hdl.dsp.soft_mult and soft_halves (the products in logic: the bilinear weights,
     fenney_polar's k2 and k3) against Python's integer product, exhaustively: an unsigned
     narrow operand by a signed or unsigned wide one, given either way round. A signed
-    narrow operand is refused."""
+    narrow operand is refused. Also the formal flow's form (``soft_as_mul``: ``a * b``), which
+    must be the same function for its proofs to be about the adders."""
     a, b = Signal(wa), Signal(signed(wb) if signed_b else wb)
     m, width = Module(), wa + wb + 2
-    ab, ba, lo, hi = (Signal(signed(width)) for _ in range(4))
+    ab, ba, lo, hi, as_mul = (Signal(signed(width)) for _ in range(5))
     l, h, k = soft_halves(a, b)
     m.d.comb += [ab.eq(soft_mult(a, b)), ba.eq(soft_mult(b, a)), lo.eq(l), hi.eq(h)]
+    with soft_as_mul():
+        m.d.comb += as_mul.eq(soft_mult(b, a))
     bad = []
 
     async def bench(ctx):
@@ -101,13 +104,14 @@ def test_soft_products_are_exact(wa, wb, signed_b):
             for y in (range(-(1 << wb - 1), 1 << wb - 1) if signed_b else range(1 << wb)):
                 ctx.set(a, x)
                 ctx.set(b, y)
-                got = (ctx.get(ab), ctx.get(ba), ctx.get(lo) + (ctx.get(hi) << k))
-                if got != (x * y,) * 3:
+                got = (ctx.get(ab), ctx.get(ba), ctx.get(lo) + (ctx.get(hi) << k),
+                       ctx.get(as_mul))
+                if got != (x * y,) * 4:
                     bad.append((x, y, got))
     sim = Simulator(m)
     sim.add_testbench(bench)
     sim.run()
-    assert not bad, f"{len(bad)} wrong products; first (a, b, (a b, b a, halves)): {bad[0]}"
+    assert not bad, f"{len(bad)} wrong products; first (a, b, (a b, b a, halves, as_mul)): {bad[0]}"
     with pytest.raises(ValueError, match="narrower operand must be unsigned"):
         soft_mult(Signal(signed(4)), Signal(8))
 
