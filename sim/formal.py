@@ -496,8 +496,9 @@ def _reached(log):
 
 def prove_depth(unit, only):
     """k of k-induction. ``held`` is 2-inductive (the raster's too): ``PROVE_DEPTH``. A
-    one-row unit's ``CONTROL`` and ``ORDER``: latency + 2, so that the window holds the watched input's
-    acceptance and its exit (``inv_occ`` ties the counters to the stages everywhere else)."""
+    one-row unit's ``CONTROL`` and ``ORDER``: latency + 2, so that the window holds the
+    watched input's acceptance and its exit (``inv_occ`` ties the counters to the stages
+    everywhere else)."""
     return unit.latency + 2 if tuple(only or ()) in (CONTROL, ORDER) and not is_multi(unit) \
         else PROVE_DEPTH
 
@@ -515,9 +516,11 @@ MUTANT_TARGETS = {"texel_decode": ("unstable", "dropped", "extra", "slow", "stuc
 
 
 def jobs(names, mutants=True):
-    """``[(target, unit, params, mode, mutant, only)]``. A one-row unit: ``CONTROL`` and
-    ``ORDER`` (every property, with the invariant ``inv_occ``) proven by k-induction, whose
-    base case is the BMC to latency + 2 (a proof holds at every depth). The raster and the pipelines: a BMC
+    """``[(target, unit, params, mode, mutant, only)]``. A one-row unit: ``held`` (k =
+    ``PROVE_DEPTH``), ``CONTROL`` and ``ORDER`` (every property, with the invariant
+    ``inv_occ``) proven by k-induction, whose base case is the BMC to latency + 2 (a proof
+    holds at every depth); what ORDER leaves unproven, the other two may still prove. The
+    raster and the pipelines: a BMC
     of every property and a k-induction proof of ``held`` (no invariant ties their harness's
     counters to their rows in flight: docs/formal.md). Then each target's covers, and the
     mutants."""
@@ -529,8 +532,8 @@ def jobs(names, mutants=True):
             out += [(name, unit, params, "bmc", None, None),
                     (name, unit, params, "prove", None, "held")]
         else:
-            out += [(name, unit, params, "prove", None, CONTROL),
-                    (name, unit, params, "prove", None, ORDER)]
+            out += [(name, unit, params, "prove", None, only)
+                    for only in ("held", CONTROL, ORDER)]
         out += [(name, unit, params, "cover", None, None)]
         if mutants:
             out += [(name, unit, params, "bmc", m, None) for m in MUTANT_TARGETS.get(name, ())]
@@ -538,10 +541,12 @@ def jobs(names, mutants=True):
 
 
 # a one-row unit's properties proven by k-induction, with the invariant inv_occ that makes
-# them inductive: CONTROL reads no data but the output's stability (seconds); ORDER adds the
-# comparison with the second copy, what the solver finds hard (fenney_polar's soft products)
-CONTROL = ("held", "no_extra", "drain", "inv_occ")
-ORDER = CONTROL + ("order",)
+# them inductive: CONTROL reads no data (so the datapath drops out of the model), ORDER adds
+# the stalled output's payload and the comparison with the second copy, what the solver finds
+# hard (rotation's CORDICs); held (the payload too) alone is 2-inductive, a short window
+CONTROL = ("no_extra", "drain", "inv_occ")
+ORDER = ("held",) + CONTROL + ("order",)
+PROPERTIES = ("held", "no_extra", "drain", "order")
 QUICK = ("texel_decode", "power_table", "colour", "fenney_power")
 
 
@@ -564,16 +569,20 @@ def table(results):
         unit, params = targets()[name]
         u = make_unit(unit, spec=True, **params)
         multi = is_multi(u)
-        # what each proof covers, widest first: a one-row unit's ORDER holds every property,
-        # CONTROL all but order
-        proofs = [(("held",), "held")] if multi else \
-            [(ORDER, "held, no_extra, drain, order"), (CONTROL, "held, no_extra, drain")]
+        # what each proof covers: a one-row unit's ORDER holds every property, CONTROL
+        # no_extra and drain, "held" held; the row gives the union of those that passed
+        proofs = [(("held",), ("held",))] if multi else \
+            [(ORDER, PROPERTIES), (CONTROL, ("no_extra", "drain")), (("held",), ("held",))]
         done = [(runs[("prove", k)], what) for k, what in proofs if ("prove", k) in runs]
-        won = next(((r, what) for r, what in done if r["status"] == "pass"), None)
-        pr, k, ps = (f"**{won[1]}**", won[0]["depth"], won[0]["seconds"]) if won else \
-            ("none", "-", 0)
-        left = [] if multi or not done or done[0][0]["status"] == "pass" else \
-            [f"order: {done[0][0]['status']} at {done[0][0]['seconds']:.0f} s"]
+        won = [(r, what) for r, what in done if r["status"] == "pass"]
+        proven = [p for p in PROPERTIES if any(p in what for _, what in won)]
+        pr, k, ps = (f"**{', '.join(proven)}**", max(r["depth"] for r, _ in won),
+                     sum(r["seconds"] for r, _ in won)) if won else ("none", "-", 0)
+        left = []                 # each property left: the status of the widest run with it
+        for p in () if multi else PROPERTIES:
+            tried = [r for r, what in done if p in what]
+            if p not in proven and tried:
+                left.append(f"{p}: {tried[0]['status']} at {tried[0]['seconds']:.0f} s")
         bmc_of = ("held, no_extra, order (tri, y, x rise); products free"
                   + (", memory join" if u.stream_ports else "")) if multi else "-"
         if not b:
