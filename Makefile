@@ -57,10 +57,10 @@ report: setup
 # Place and route of every unit and the default scene's pipeline in a serial wrapper, on
 # ECP5-25F -6 and iCE40 UP5K, 5 seeds: Fmax (median, min-max), utilisation, critical path.
 # Writes build/fpga/fpga.{json,md}; unchanged designs come from build/fpga/cache/.
-# make fpga [UNIT=a,b] [SEEDS=n]
+# make fpga [UNIT=a,b] [SEEDS=n] [RASTER=row_serial=2,setup_serial=1] (a scene pipeline's raster knobs)
 SEEDS   ?= 5
 fpga: setup
-	$(PY) -m sim.fpga --seeds $(SEEDS) $(if $(UNIT),--units $(UNIT))
+	$(PY) -m sim.fpga --seeds $(SEEDS) $(if $(UNIT),--units $(UNIT))$(if $(RASTER), --raster $(RASTER))
 
 # The stream contract proven by SymbiYosys (yowasp-sby, yices): every unit and a pipeline per
 # method and bump method: the one-row units by k-induction, the raster and the pipelines by

@@ -22,8 +22,8 @@ import numpy as np
 
 from hdl.units import UNITS, describe, make_unit, parse_params
 
-from .cli_common import (UsageError, check_output_path, read_fields, read_inputs, rows,
-                         summary, user_errors, write_outputs)
+from .cli_common import (UsageError, check_output_path, raster_knobs, read_fields,
+                         read_inputs, rows, summary, user_errors, write_outputs)
 from .run import simulate
 from .simulators import SIMS, available
 
@@ -136,29 +136,7 @@ def cmd_render(args):
                          f"{args.mem_latency} and {args.mem_ready}")
     render(args.scene, args.out, args.simulator, size, mem_latency=args.mem_latency,
            mem_ready=args.mem_ready, hardware={"texture": args.texture,
-                                               **_raster_knobs(args.raster)})
-
-
-RASTER_KNOBS = ("setup_ii", "setup_mults", "setup_narrow", "row_mults", "row_serial",
-                "setup_serial", "vector_bits", "recip", "recip_iters")
-
-
-def _raster_knobs(text):
-    """``--raster setup_ii=16,setup_mults=2``: the raster's build knobs (docs/quadratic.md),
-    each checked by the pipeline's own ranges."""
-    out = {}
-    for item in filter(None, (text or "").split(",")):
-        key, sep, value = (x.strip() for x in item.partition("="))
-        if not sep or key not in RASTER_KNOBS:
-            raise UsageError(f"--raster: {item!r} is not KNOB=VALUE with a knob of "
-                             f"{', '.join(RASTER_KNOBS)}")
-        if key == "recip":
-            out[key] = value
-        elif value.isdigit():
-            out[key] = int(value)
-        else:
-            raise UsageError(f"--raster: {key} must be a whole number, not {value!r}")
-    return out
+                                               **raster_knobs(args.raster)})
 
 
 def params_for(names, pairs, chosen):

@@ -126,3 +126,25 @@ def user_errors():
     except BrokenPipeError:                    # output piped into head, say
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         sys.exit(0)
+
+
+RASTER_KNOBS = ("setup_ii", "setup_mults", "setup_narrow", "row_mults", "row_serial",
+                "setup_serial", "vector_bits", "recip", "recip_iters")
+
+
+def raster_knobs(text):
+    """``--raster setup_ii=16,setup_mults=2``: the raster's build knobs (docs/quadratic.md),
+    each checked by the pipeline's own ranges (``sim render``, ``sim.fpga``)."""
+    out = {}
+    for item in filter(None, (text or "").split(",")):
+        key, sep, value = (x.strip() for x in item.partition("="))
+        if not sep or key not in RASTER_KNOBS:
+            raise UsageError(f"--raster: {item!r} is not KNOB=VALUE with a knob of "
+                             f"{', '.join(RASTER_KNOBS)}")
+        if key == "recip":
+            out[key] = value
+        elif value.isdigit():
+            out[key] = int(value)
+        else:
+            raise UsageError(f"--raster: {key} must be a whole number, not {value!r}")
+    return out

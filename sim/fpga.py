@@ -41,7 +41,7 @@ from amaranth.lib.wiring import In, Out
 from hdl.dsp import Target
 from hdl.units import UNITS, make_unit
 
-from .cli_common import UsageError, unit_names, user_errors
+from .cli_common import UsageError, raster_knobs, unit_names, user_errors
 from .verilog import BUILD, SCENES
 
 OUT = BUILD / "fpga"
@@ -140,16 +140,18 @@ def board_form(params, texture="onchip"):
 BOARD_TEXTURE = {"angular": 32}
 
 
-def designs(names, texture="onchip"):
+def designs(names, texture="onchip", raster=None):
     """``[(label, unit name, params)]``: the units, then the scenes' pipelines ("scene": the
-    default scene's; "scene_<name>": ``scenes/<name>.toml``'s), in their board form."""
+    default scene's; "scene_<name>": ``scenes/<name>.toml``'s), in their board form, built
+    with the raster knobs ``raster`` (``sim render --raster``'s; the label names them)."""
     from scene.driver import load, pipeline_params
     out = [(n, n, {}) for n in names if n in UNITS]
+    tag = "".join(f"-{k}{v}" for k, v in (raster or {}).items())
     for n in names:
         if n == "scene" or n.startswith("scene_"):
             path = SCENE if n == "scene" else SCENES / f"{n[len('scene_'):]}.toml"
-            out.append((f"scene_{path.stem}", "scene",
-                        board_form(pipeline_params(load(path)), texture)))
+            out.append((f"scene_{path.stem}{tag}", "scene",
+                        board_form(pipeline_params(load(path), hardware=raster), texture)))
     return out
 
 
@@ -324,8 +326,9 @@ def markdown(rows, seeds):
     return "\n".join(lines)
 
 
-def run(names, devices, seeds, jobs, quiet=False, cache=OUT / "cache", texture="onchip"):
-    todo = [(label, name, params, dev) for label, name, params in designs(names, texture)
+def run(names, devices, seeds, jobs, quiet=False, cache=OUT / "cache", texture="onchip",
+        raster=None):
+    todo = [(label, name, params, dev) for label, name, params in designs(names, texture, raster)
             for dev in devices]
     synths = {}
     with ThreadPoolExecutor(jobs) as pool, tqdm(total=len(todo) * (seeds + 1), desc="fpga",
@@ -375,6 +378,8 @@ def main(argv=None):
     ap.add_argument("--texture", choices=("onchip", "external"), default="onchip",
                     help="bump pipelines: the texture RAM on chip (default, at most 128 x 128) "
                          "or the external memory port")
+    ap.add_argument("--raster", help="the scene pipelines' raster knobs, as sim render's: "
+                                     "row_serial=2,setup_serial=1 (docs/quadratic.md)")
     args = ap.parse_args(argv)
     with user_errors():
         names = unit_names(args.units, {**UNITS, "scene": None,
@@ -386,7 +391,13 @@ def main(argv=None):
                 raise UsageError(f"--devices: unknown device {d!r}; known: ecp5, ice40")
         if args.seeds < 1:
             raise UsageError("--seeds must be at least 1")
-        rows = run(names, devices, args.seeds, args.jobs, texture=args.texture)
+        raster = raster_knobs(args.raster)
+        if raster and not any(n == "scene" or n.startswith("scene_") for n in names):
+            raise UsageError("--raster: the knobs are the scene pipelines'; name one in --units "
+                             "(scene, scene_<name>)")
+        for _, name, params in designs(names, args.texture, raster):
+            make_unit(name, spec=True, **params)          # the knobs' ranges, before any run
+        rows = run(names, devices, args.seeds, args.jobs, texture=args.texture, raster=raster)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "fpga.json").write_text(json.dumps(rows, indent=1) + "\n")
