@@ -127,11 +127,11 @@ def drain_bound(unit):
     return raster.latency + (2 * rows - 1) * ii + (ROW_QUEUE + 3) * width + shading + misses
 
 
-def harness(unit, module, mutant=None, only=None, cut=False, valids=()):
+def harness(unit, module, mutant=None, only=None, cut=False, valids=(), regs=()):
     """The Verilog of the harness ``formal_top`` around ``module``; ``only``: the assertions
     of that property (or tuple of properties) alone (a mutant is caught by the property it
-    breaks, not by another); ``valids``: a one-row unit's stage valid bits (``stage_valids``),
-    which ``inv_occ`` counts."""
+    breaks, not by another); ``valids``, ``regs``: a one-row unit's stage valid bits and data
+    registers (``stage_valids``, ``stage_regs``), which its shadow's invariants name."""
     ins, outs, uni, status, streams = _ports(unit)
     multi = "tri" in {f.name for f in unit.outputs}
     host = any(p == "i_cmd" for p, _ in ins)
@@ -225,7 +225,7 @@ def harness(unit, module, mutant=None, only=None, cut=False, valids=()):
           "  always @(posedge clk) if (watch_in | (watched & age != {COUNT{1'b1}})) "
           "age <= watch_in ? 1 : age + 1;".replace("{COUNT", "{" + str(COUNT))]
     if not multi:
-        L += _one_row(unit, module, ins, outs, uni, valids)
+        L += _one_row(unit, module, ins, outs, uni, valids, regs)
     else:
         L += _many(unit, ins, outs, status, host, cut)
     for name, (d, fields) in streams.items():
@@ -244,8 +244,23 @@ def harness(unit, module, mutant=None, only=None, cut=False, valids=()):
     return text
 
 
-def _one_row(unit, module, ins, outs, uni, valids):
+def _one_row(unit, module, ins, outs, uni, valids, regs=()):
+    """A one-row unit's properties, and the invariants that make them inductive, each an
+    equality of a few bits (no count of many bits, which a CDCL solver finds hard: bump_polar's
+    53 valid bits counted ran 20 minutes without an answer): a shadow of the unit's control
+    (``hdl.unit.Pipeline``: one enable, its ``i_ready``), shifted as the unit's stages are:
+
+    - ``sv``: each stage's valid bit, equal to the unit's (``inv_shadow``);
+    - ``c_k``: the items in stages k.. (registered, so each step checks ``c_k = sv[k] +
+      c_(k+1)`` from the same equation a clock earlier), ``c_0`` the harness's n_in - n_out
+      (``inv_count``);
+    - ``sw``: the watched item's stage, which is ``age`` - 1 (ready is held high from its
+      acceptance) and has ``watch`` - n_out items ahead of it (``inv_watch``);
+    - ``regs`` (``order``): the watched item's stage registers equal the second copy's
+      (``inv_data``), and the copy's valid bits are ``sw`` (``inv_ref``)."""
     lat = unit.latency
+    N = len(valids)
+    B = max(N, 1).bit_length()
     ref = [f"  wire ref_valid, ref_ready_unused;"]
     ref += [f"  wire [{w - 1}:0] ref_{p};" for p, w in outs]
     conn = {"clk": "clk", "rst": "rst", "i_valid": "watch_in", "i_ready": "ref_ready_unused",
@@ -253,16 +268,39 @@ def _one_row(unit, module, ins, outs, uni, valids):
             **{p: f"ref_{p}" for p, _ in outs}}
     ref += [f"  {module} ref (" + ", ".join(f".{k}({v})" for k, v in conn.items()) + ");"]
     refo = "{" + ", ".join(f"ref_{p}" for p, _ in outs) + "}"
-    return ref + [
+    shift = lambda v, x: f"{{{v}[{N - 2}:0], {x}}}" if N > 1 else x
+    sh = [  # the shadow: wired in by sby_text's connects (occ_k, rocc_k, dq_j, rq_j)
+        *[f"  (* keep *) wire occ_{k}, rocc_{k};" for k in range(N)],
+        *[f"  (* keep *) wire [{w - 1}:0] dq_{j}, rq_{j};" for j, (_, _, w) in enumerate(regs)],
+        f"  reg [{max(N, 1) - 1}:0] sv = 0, sw = 0;",
+        *[f"  reg [{B - 1}:0] c_{k} = 0;" for k in range(N)],
+        f"  wire [{B - 1}:0] c_{N} = 0;",
+        "  always @(posedge clk) if (rst) begin sv <= 0; sw <= 0; "
+        + " ".join(f"c_{k} <= 0;" for k in range(N)) + " end",
+        f"  else if (i_ready) begin sv <= {shift('sv', 'i_valid')}; "
+        f"sw <= {shift('sw', 'watch_in')};",
+        f"    c_0 <= c_0 + i_valid - sv[{N - 1}]; "
+        + " ".join(f"c_{k} <= c_{k - 1} - sv[{N - 1}];" for k in range(1, N)) + " end"]
+    checks = []
+    for k in range(N):
+        checks += [f"    inv_shadow_{k}: assert(occ_{k} == sv[{k}]);",
+                   f"    inv_count_{k}: assert(c_{k} == sv[{k}] + c_{k + 1} && "
+                   f"c_{k} <= {N - k});",
+                   f"    if (sw[{k}]) inv_watch_{k}: assert(sv[{k}] && age == {k + 1} && "
+                   f"n_out + c_{k + 1} == watch);",
+                   f"    inv_ref_{k}: assert(rocc_{k} == sw[{k}]);"]
+    for k in range(1, N + 1):
+        same = [j for j, (s, _, _) in enumerate(regs) if s == k]
+        if same:
+            checks.append(f"    if (sw[{k - 1}]) inv_data_{k}: assert("
+                          + " && ".join(f"dq_{j} == rq_{j}" for j in same) + ");")
+    return ref + sh + [
         f"  reg [{_width(outs) - 1}:0] ref_out;", "  reg ref_done = 1'b0;",
         f"  always @(posedge clk) if (ref_valid) begin ref_done <= 1'b1; ref_out <= {refo}; end",
         "  reg watch_done = 1'b0;",
         "  wire watch_out = out_t && watched && !watch_done && n_out == watch;",
         "  always @(posedge clk) if (watch_out) watch_done <= 1'b1;",
         "  wire pending = watched && !watch_done;",
-        # the items in flight are the stages' valid bits (wired in by sby_text's connects):
-        # the invariant that makes no_extra and drain inductive
-        *[f"  (* keep *) wire occ_{k};" for k in range(len(valids))],
         f"  wire [{COUNT - 1}:0] in_flight = n_in - n_out;",
         # ready held high from the watched input's acceptance until it is out
         "  always @* if (watch_in || pending) assume(o_ready_env);",
@@ -270,7 +308,11 @@ def _one_row(unit, module, ins, outs, uni, valids):
         # out never passes in: their difference (mod 2**COUNT, so unbounded) stays within
         # the stages
         f"    no_extra: assert(in_flight <= {lat});",
-        f"    if (!rst) inv_occ: assert(in_flight == {' + '.join(f'occ_{k}' for k in range(len(valids))) or '0'});",
+        f"    if (!rst) begin",
+        f"    inv_count: assert(in_flight == c_0);",
+        f"    inv_watch: assert(pending == (sw != 0) && (watched || sw == 0 && !watch_done));",
+        *checks,
+        "    end",
         f"    if (pending) drain: assert(age <= {lat});",
         "    if (watch_out) begin",
         "      order_ref: assert(ref_done || ref_valid);",
@@ -409,27 +451,52 @@ endmodule
 """
 
 
+def _core(verilog, module):
+    return verilog.split(f"module \\{module}.core", 1)[1].split("endmodule", 1)[0]
+
+
 def stage_valids(verilog, module):
-    """A one-row unit's stage valid bits, as the flattened harness names them: the registers
-    ``s<k>_valid`` and ``o__valid`` of its core (``hdl.unit.Pipeline``), one per item in
-    flight. A wrong list cannot pass: ``inv_occ`` asserts that they count the items."""
-    core = verilog.split(f"module \\{module}.core", 1)[1].split("endmodule", 1)[0]
-    return [f"dut.core.{n}" for n in re.findall(r"reg (s\d+_valid|o__valid) = ", core)]
+    """A one-row unit's stage valid bits in stage order, as paths within the unit (``core.s1_valid``
+    .. ``core.o__valid``, ``hdl.unit.Pipeline``'s names: the last stage's is ``o__valid``), one
+    per item in flight. A wrong list cannot pass: ``inv_shadow`` asserts each equal to the
+    shadow's bit for its stage."""
+    core = _core(verilog, module)
+    ks = sorted(int(k) for k in re.findall(r"reg s(\d+)_valid = ", core))
+    last = ["core.o__valid"] if re.search(r"reg o__valid = ", core) else []
+    return [f"core.s{k}_valid" for k in ks] + last
 
 
-def sby_text(module, depth, mode, cut=False, valids=()):
+def stage_regs(verilog, module):
+    """A one-row unit's data registers: ``[(stage, path, width)]``, stage k's ``s<k>_<name>``
+    (``hdl.unit.Pipeline``), which hold the item in stage k alone."""
+    core = _core(verilog, module)
+    out = []
+    for w, k, name in re.findall(r"reg (?:signed )?(?:\[(\d+):0\] )?s(\d+)_(\w+) = ", core):
+        if name != "valid":
+            out.append((int(k), f"core.s{k}_{name}", int(w or 0) + 1))
+    return sorted(out)
+
+
+def sby_text(module, depth, mode, cut=False, valids=(), regs=(), ref=False):
     """The SymbiYosys job: ``mode`` is ``bmc``, ``prove`` or ``cover``; ``cut``: every
     multiplier's product a free value (sound for these properties: they hold for any
-    products, so they hold for the right ones); else the products' stand-in. ``valids``:
-    wired to the harness's ``occ_<k>`` once flattened (Verilog has no path into the unit)."""
+    products, so they hold for the right ones); else the products' stand-in. ``valids``,
+    ``regs``: the unit's stage valid bits and data registers (``stage_valids``,
+    ``stage_regs``), in both copies wired to the harness's shadow (``occ_k``, ``rocc_k``,
+    ``dq_j``, ``rq_j``) once flattened (Verilog has no path into the unit)."""
     mul = ["cutpoint t:$mul"] if cut else ["techmap -map mul_standin.v t:$mul", "opt_clean"]
     tables = ["hierarchy -top formal_top", "proc", "memory_collect",
               "techmap -map rom_standin.v t:$mem_v2"] if valids else []
     if valids:
         # a ROM as logic: its words are constants, not state that the induction's first
         # step may choose freely in each copy (power_table's order "failed" so)
+        # the copy's, only where order reads it (elsewhere its logic is optimised away)
+        copies = (("occ", "dut"), ("rocc", "ref")) if ref else (("occ", "dut"),)
+        wires = [(f"{w}_{k}", f"{c}.{v}") for k, v in enumerate(valids) for w, c in copies]
+        wires += [(f"{w}_{j}", f"{c}.{v}") for j, (_, v, _) in enumerate(regs)
+                  for w, c in (("dq", "dut"), ("rq", "ref"))]
         mul += ["flatten", "memory_map -rom-only", "cd formal_top",
-                *[f"connect -set occ_{k} {v}" for k, v in enumerate(valids)], "cd .."]
+                *[f"connect -set {w} {v}" for w, v in wires], "cd .."]
     return "\n".join([
         "[options]", f"mode {mode}", f"depth {depth}", "multiclock off", "",
         "[engines]", "smtbmc yices", "",
@@ -460,10 +527,19 @@ def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=No
         export(unit_name, params, out_dir=work, module=module)
     only = mutant_property(mutant, unit) if mutant else only
     cut = is_multi(unit)              # the raster's products free: see _many and sby_text
-    valids = () if cut else stage_valids((work / f"{module}.v").read_text(), module)
-    (work / "harness.v").write_text(harness(unit, module, mutant, only, cut, valids))
+    verilog = (work / f"{module}.v").read_text()
+    valids = () if cut else stage_valids(verilog, module)
+    # the data invariant only where order is asserted (its registers are the model's size)
+    keep = (only,) if isinstance(only, str) else tuple(only or ("order",))
+    regs = stage_regs(verilog, module) if valids and "order" in keep else ()
+    if regs:        # a register no output reads would be optimised away before the connects
+        verilog = re.sub(r"^(\s*)(reg (?:signed )?(?:\[\d+:0\] )?s\d+_\w+ = )",
+                         r"\1(* keep *) \2", verilog, flags=re.M)
+        (work / f"{module}.v").write_text(verilog)
+    (work / "harness.v").write_text(harness(unit, module, mutant, only, cut, valids, regs))
     depth = depth or (prove_depth(unit, only) if mode == "prove" else default_depth(unit))
-    (work / "job.sby").write_text(sby_text(module, depth, mode, cut, valids))
+    (work / "job.sby").write_text(sby_text(module, depth, mode, cut, valids, regs,
+                                           ref="order" in keep))
     (work / "mul_standin.v").write_text(MUL_STANDIN)
     (work / "rom_standin.v").write_text(ROM_STANDIN)
     t0 = time.monotonic()
@@ -495,12 +571,13 @@ def _reached(log):
 
 
 def prove_depth(unit, only):
-    """k of k-induction. ``held`` is 2-inductive (the raster's too): ``PROVE_DEPTH``. A
-    one-row unit's ``CONTROL`` and ``ORDER``: latency + 2, so that the window holds the
-    watched input's acceptance and its exit (``inv_occ`` ties the counters to the stages
-    everywhere else)."""
-    return unit.latency + 2 if tuple(only or ()) in (CONTROL, ORDER) and not is_multi(unit) \
-        else PROVE_DEPTH
+    """k of k-induction: ``PROVE_DEPTH`` for every proof. ``held`` is 2-inductive (a stalled
+    pipeline holds its registers; the raster's too). A one-row unit's ``CONTROL`` and
+    ``ORDER`` are made inductive by the shadow's invariants (``_one_row``), each of which
+    follows from itself a clock earlier; the window's few clocks settle the registers they
+    do not name (a product's, a table's read). Before the shadow (2026-12-04), the window had
+    to hold the watched input's whole way through: latency + 2."""
+    return PROVE_DEPTH
 
 
 def default_depth(unit):
@@ -517,9 +594,9 @@ MUTANT_TARGETS = {"texel_decode": ("unstable", "dropped", "extra", "slow", "stuc
 
 def jobs(names, mutants=True):
     """``[(target, unit, params, mode, mutant, only)]``. A one-row unit: ``held`` (k =
-    ``PROVE_DEPTH``), ``CONTROL`` and ``ORDER`` (every property, with the invariant
-    ``inv_occ``) proven by k-induction, whose base case is the BMC to latency + 2 (a proof
-    holds at every depth); what ORDER leaves unproven, the other two may still prove. The
+    ``PROVE_DEPTH``), ``CONTROL`` and ``ORDER`` (every property, with the shadow's
+    invariants) proven by k-induction (a proof holds at every depth); what ORDER leaves
+    unproven, the other two may still prove. The
     raster and the pipelines: a BMC
     of every property and a k-induction proof of ``held`` (no invariant ties their harness's
     counters to their rows in flight: docs/formal.md). Then each target's covers, and the
@@ -540,12 +617,12 @@ def jobs(names, mutants=True):
     return out
 
 
-# a one-row unit's properties proven by k-induction, with the invariant inv_occ that makes
-# them inductive: CONTROL reads no data (so the datapath drops out of the model), ORDER adds
-# the stalled output's payload and the comparison with the second copy, what the solver finds
-# hard (rotation's CORDICs); held (the payload too) alone is 2-inductive, a short window
-CONTROL = ("no_extra", "drain", "inv_occ")
-ORDER = ("held",) + CONTROL + ("order",)
+# a one-row unit's properties proven by k-induction, with the shadow's invariants that make
+# them inductive (_one_row): CONTROL reads no data (so the datapath drops out of the model),
+# ORDER adds the stalled output's payload and the comparison with the second copy, stage by
+# stage (inv_data); held (the payload too) alone is 2-inductive
+CONTROL = ("no_extra", "drain", "inv_shadow", "inv_count", "inv_watch")
+ORDER = ("held",) + CONTROL + ("inv_ref", "inv_data", "order")
 PROPERTIES = ("held", "no_extra", "drain", "order")
 QUICK = ("texel_decode", "power_table", "colour", "fenney_power")
 

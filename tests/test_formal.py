@@ -59,13 +59,25 @@ def _cells_after(tmp_path, standin, passes, verilog):
 
 
 def test_the_invariant_fails_when_a_stage_is_left_out(monkeypatch):
-    """inv_occ says the stages' valid bits count the items in flight. The list comes from the
-    exported Verilog's names; one bit left out must fail, in the base case (a real trace),
-    so a wrong list can never make the proof pass."""
+    """inv_shadow says the unit's stage valid bits are the shadow's, stage by stage. The list
+    comes from the exported Verilog's names; one bit left out must fail, in the base case (a
+    real trace), so a wrong list can never make the proof pass."""
     real = sim.formal.stage_valids
     monkeypatch.setattr(sim.formal, "stage_valids", lambda v, m: real(v, m)[1:])
     r = run(UNIT, UNIT, {}, "prove", only=CONTROL)
-    assert r["status"] == "fail" and "inv_occ" in r["failed"], r
+    assert r["status"] == "fail" and any(f.startswith("inv_shadow") for f in r["failed"]), r
+
+
+def test_the_data_invariant_fails_on_a_wrong_stage(monkeypatch):
+    """inv_data says the watched item's registers in stage k equal the copy's; with the stages
+    swapped it must not be proven (the induction step finds the state where they differ), so
+    the invariant that makes order inductive is checked like any other assertion, not
+    assumed."""
+    real = sim.formal.stage_regs
+    monkeypatch.setattr(sim.formal, "stage_regs",
+                        lambda v, m: [(k % 2 + 1, p, w) for k, p, w in real(v, m)])
+    r = run(UNIT, UNIT, {}, "prove", only=ORDER)
+    assert r["status"] != "pass" and any(f.startswith("inv_data") for f in r["failed"]), r
 
 
 def test_the_tables_stand_in_replaces_roms_only(tmp_path):
