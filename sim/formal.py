@@ -215,7 +215,10 @@ def harness(unit, module, mutant=None, only=None, cut=False, valids=(), regs=())
     # the watched input: the solver picks its index
     L += [f"  (* anyconst *) reg [{COUNT - 1}:0] watch;",
           f"  reg [{COUNT - 1}:0] n_tri = 0;",       # triangles (the rest of i: writes)
-          f"  always @(posedge clk) if (!rst) n_tri <= n_tri + {tri};",
+          # parenthesised: "n_tri + in_t & ~i_cmd" is (n_tri + in_t) & ~i_cmd, whose
+          # ~i_cmd, widened to 10 bits, cleared n_tri's bit 0 at every host write (the
+          # pipelines' no_extra "failed" so at step 112, 2026-12-04)
+          f"  always @(posedge clk) if (!rst) n_tri <= n_tri + ({tri});",
           # one watched input, even when the counters wrap (the proofs are unbounded)
           f"  wire watch_in = !watched && {'(' + tri + ') && n_tri' if multi else 'in_t && n_in'}"
           " == watch;",
