@@ -34,6 +34,7 @@ from hdl.shade_unit.formats import POWER, RGB
 from hdl.texture_unit import MAX_TEXTURE
 
 from . import host, obj
+from .framebuffer import framebuffer
 from .pipeline import BUMPS, METHODS, ScenePipeline, choose
 from .stage import lanes as lanes_of, raw
 from .stages.fenney_polar import pack
@@ -560,26 +561,6 @@ def _bump(scene, drawn, Ls, Hs, pipe):
 
 
 # ---- images ----------------------------------------------------------------------------------
-
-def framebuffer(size, x, y, depth, rgb, background):
-    """The depth test and the frame: the largest depth wins, the earlier fragment on a tie
-    (fragments in stream order). Returns (image uint8 (H, W, 3), covered (H, W) bool)."""
-    W, H = size
-    x, y, depth = map(np.asarray, (x, y, depth))
-    ok = (x < W) & (y < H)
-    order = np.flatnonzero(ok)
-    pix = y[order] * W + x[order]
-    best = np.lexsort((order, -depth[order], pix))
-    first = np.ones(len(best), bool)
-    first[1:] = pix[best][1:] != pix[best][:-1]
-    win = order[best[first]]
-    img = np.empty((H, W, 3), np.uint8)
-    img[:] = np.rint(np.array(background) * 255).astype(np.uint8)
-    cov = np.zeros((H, W), bool)
-    img[y[win], x[win]] = rgb[win]
-    cov[y[win], x[win]] = True
-    return img, cov
-
 
 def model(prep, **bound):
     """The float model of the scene's pipeline with the RTL's formats: each stage's model in

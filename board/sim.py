@@ -1,0 +1,191 @@
+"""``python -m board sim SCENE.toml --out DIR``: the board's core (everything but the PLL and
+the DDR primitives) on Verilator, a scene sent through its link, and one whole video frame.
+
+In: the host's frames (``board/protocol.py``) at the byte level into the link, a byte every
+10 UART bit-times, each frame after the last one's reply (the UART itself is proven at the
+bit level on its own: tests/test_board.py). Out, in ``DIR``:
+
+- ``tmds.npy``: (420000, 3) uint16, the lanes' 10-bit symbols for every pixel clock of one
+  frame (800 x 525, blanking included), lane 0 blue, 1 green, 2 red, bit 0 sent first;
+- ``frame.png``: the 640 x 480 picture decoded back from them (``board.tmds.decode``);
+- ``board.json``: clocks to render, link bytes, replies, and the pixels that differ from the
+  model: the same scene's fragments (the pipeline's RTL on the batch path) through the
+  framebuffer's model (``scene/framebuffer.py``), scaled and centred as the scan-out does.
+"""
+import hashlib
+import json
+import struct
+import subprocess
+import sys
+import time
+from importlib.metadata import version
+from pathlib import Path
+
+import numpy as np
+
+from scene import driver as S
+from scene.framebuffer import board_frame, screen
+from sim.verilog import BUILD, build_lock, prune_objects, verilator_env
+
+from .link import REPLY_BYTES
+from .protocol import Encoder, parse_reply
+from .tmds import CONTROL, decode
+from .top import BAUD, CLOCKS, BoardCore, divisor
+from .video import VGA, placement
+
+__all__ = ["Noise", "prepare", "build", "simulate", "decode_frame", "run"]
+
+HARNESS = Path(__file__).with_name("harness.cpp")
+# core : pixel clocks, as the PLL makes them (625/6 : 25 = 25 : 6)
+RATIO = (6, 25)
+
+
+class Noise(bytes):
+    """Bytes on the line that are no frame: the host expects no reply."""
+
+
+def prepare(scene_path, size=None, board="ulx3s-25f"):
+    """A scene for the board: its image checked against the board's planes, its bump map on
+    chip. Returns (prep, core)."""
+    scene = S.load(scene_path)
+    if size:
+        scene["image"]["width"], scene["image"]["height"] = size
+        scene = S.parse({k: v for k, v in scene.items() if k != "name"}, scene["name"])
+    hardware = {"texture": "onchip"} if scene["bump"]["method"] != "none" else None
+    prep = S.prepare(scene, hardware)
+    W, H = prep["size"]
+    core = BoardCore(prep["params"], W, H, board)
+    return prep, core
+
+
+def build(core):
+    """The core's Verilog in the harness, built once per design (``build/board/``)."""
+    from amaranth.back import verilog
+    text = verilog.convert(core, name="board_core", emit_src=False)
+    tag = hashlib.sha1(text.encode()).hexdigest()[:10]
+    base = BUILD / "board" / f"core-{tag}"
+    exe = base / "obj" / "harness"
+    with build_lock(base.parent / f"{base.name}.lock"):
+        stamp = hashlib.sha1(json.dumps([text, HARNESS.read_text(),
+                                         version("verilator")]).encode()).hexdigest()
+        done = base / "obj" / "stamp"
+        if not (exe.exists() and done.exists() and done.read_text() == stamp):
+            base.mkdir(parents=True, exist_ok=True)
+            src = base / "board_core.v"
+            src.write_text(text)
+            print(f"board: building the Verilator model (once; cached under {base})",
+                  file=sys.stderr, flush=True)
+            opt = "-O1"
+            cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module",
+                   "board_core", "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o",
+                   "harness", "-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT",
+                   "--x-assign", "fast", "--x-initial", "fast", "-CFLAGS", opt,
+                   "-MAKEFLAGS", f"OPT_FAST={opt} OPT_SLOW={opt} OPT_GLOBAL={opt}",
+                   str(src), str(HARNESS)]
+            r = subprocess.run(cmd, env=verilator_env(), capture_output=True, text=True)
+            (base / "build.log").write_text(r.stdout + r.stderr)
+            if r.returncode != 0:
+                raise RuntimeError(f"Verilator build of the board core failed (log: "
+                                   f"{base / 'build.log'}):\n{(r.stdout + r.stderr)[-3000:]}")
+            prune_objects(base / "obj")
+            done.write_text(stamp)
+    return exe
+
+
+def simulate(core, frames, progress=True):
+    """``frames`` through the core, each bytes (a frame: the host waits for its reply) or
+    ``Noise(bytes)`` (no reply); returns (symbols (N, 3), render clocks, reply bytes)."""
+    exe = build(core)
+    work = BUILD / "board" / "run"
+    work.mkdir(parents=True, exist_ok=True)
+    tag = f"{id(frames):x}-{time.time_ns()}"
+    inp, out = work / f"in-{tag}.bin", work / f"out-{tag}.bin"
+    inp.write_bytes(struct.pack("<I", len(frames)) + b"".join(
+        struct.pack("<I", len(f) | (1 << 31 if isinstance(f, Noise) else 0)) + bytes(f)
+        for f in frames))
+    pace = 10 * divisor(BAUD)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=len(frames), unit="frame", desc="board sim", file=sys.stderr)
+    p = subprocess.Popen([str(exe), str(inp), str(out), str(pace), *map(str, RATIO)],
+                         stderr=subprocess.PIPE, text=True)
+    err = []
+    for line in p.stderr:
+        if line.startswith("frame ") and bar is not None:
+            bar.update(1)
+        elif not line.startswith("frame "):
+            err.append(line)
+    p.wait()
+    if bar is not None:
+        bar.close()
+    inp.unlink()
+    if p.returncode != 0:
+        raise RuntimeError("".join(err).strip() or f"the board harness failed ({p.returncode})")
+    raw = out.read_bytes()
+    out.unlink()
+    render, n = struct.unpack_from("<II", raw)
+    sym = np.frombuffer(raw, np.uint16, 3 * n, 8).reshape(n, 3).copy()
+    (nr,) = struct.unpack_from("<I", raw, 8 + 6 * n)
+    replies = raw[12 + 6 * n:12 + 6 * n + nr]
+    return sym, render, replies
+
+
+def decode_frame(sym, timing=VGA):
+    """The symbols of one frame back to the picture: (480, 640, 3), and a list of what broke
+    the rules (a data character outside the active picture, a token inside it, the syncs'
+    tokens in the wrong place)."""
+    h, v = timing
+    img = np.zeros((v.active, h.active, 3), np.uint8)
+    errors = []
+    grid = sym.reshape(v.total, h.total, 3)
+    for y in range(v.total):
+        for x in range(h.total):
+            active = x < h.active and y < v.active
+            hs = not (h.active + h.front <= x < h.active + h.front + h.sync)
+            vs = not (v.active + v.front <= y < v.active + v.front + v.sync)
+            for lane in range(3):
+                kind, value = decode(grid[y, x, lane])
+                if active:
+                    if kind != "data":
+                        errors.append((x, y, lane, "a token in the picture"))
+                    else:
+                        img[y, x, 2 - lane] = value
+                elif kind != "control" or value != ((vs << 1 | hs) if lane == 0 else 0):
+                    errors.append((x, y, lane, f"blanking: {kind} {value}"))
+        if len(errors) > 20:
+            break
+    return img, errors
+
+
+def run(scene_path, out_dir, size=None, board="ulx3s-25f", progress=True):
+    """The whole check; writes the three files and returns board.json's contents."""
+    from PIL import Image
+    from sim.render import run_rtl
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    prep, core = prepare(scene_path, size, board)
+    frames = Encoder(core.pipe, core.buffer).scene(prep)
+    t0 = time.time()
+    sym, render, replies = simulate(core, frames, progress)
+    wall = time.time() - t0
+    np.save(out_dir / "tmds.npy", sym)
+    img, errors = decode_frame(sym)
+    Image.fromarray(img).save(out_dir / "frame.png")
+    # the model: the pipeline's own fragments, the framebuffer's model, the scan-out's scale
+    _, _, frags, _, _, _ = run_rtl(prep, "verilator", progress=None)
+    W, H = prep["size"]
+    model = screen(board_frame((W, H), frags, prep["scene"]["image"]["background"]),
+                   *placement(W, H))
+    Image.fromarray(model).save(out_dir / "model.png")
+    differ = int((img != model).any(-1).sum())
+    last = [parse_reply(replies[k:k + REPLY_BYTES])
+            for k in range(0, len(replies), REPLY_BYTES)]
+    report = {"scene": prep["scene"]["name"], "size": [W, H], "board": board,
+              "clocks_to_render": render, "core_mhz": round(CLOCKS["sync"][0], 3),
+              "baud": BAUD, "link_bytes": sum(len(f) for f in frames),
+              "frames": len(frames), "replies": last[-1] if last else None,
+              "fragments_model": len(frags["x"]), "symbol_errors": errors[:10],
+              "pixels_differ": differ, "wall_s": round(wall, 1)}
+    (out_dir / "board.json").write_text(json.dumps(report, indent=1) + "\n")
+    return report

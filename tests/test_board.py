@@ -1,0 +1,360 @@
+"""The board (board/): the TMDS encoder against the DVI rules and an independent model, the
+UART at the bit level, the link's frames good and bad, the depth-tested framebuffer against
+its model, and one whole video frame of a small scene on Verilator."""
+import random
+import struct
+
+import numpy as np
+import pytest
+from amaranth.sim import Simulator
+
+from board.framebuffer import Framebuffer
+from board.link import COUNTERS, REPLY_BYTES, SYNC, Link, crc16
+from board.protocol import Encoder, frame, parse_reply
+from board.tmds import CONTROL, TMDSEncoder, decode, disparity, encode
+from board.uart import UARTRx, UARTTx
+from scene.framebuffer import board_frame, expand565
+
+
+
+# ---- TMDS -----------------------------------------------------------------------------------
+
+def _tmds_rtl(data, c, de):
+    dut, out = TMDSEncoder(), []
+
+    async def bench(ctx):
+        for k in range(len(data) + TMDSEncoder.latency):
+            if k < len(data):
+                ctx.set(dut.data, data[k]); ctx.set(dut.c, c[k]); ctx.set(dut.de, de[k])
+            await ctx.tick()
+            out.append(ctx.get(dut.symbol))
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.run()
+    return out[TMDSEncoder.latency - 1:TMDSEncoder.latency - 1 + len(data)]
+
+
+def _line(rng, n=800, active=640):
+    """A line's inputs: random bytes while DE, random control bits in the blanking."""
+    data = [rng.randrange(256) for _ in range(n)]
+    de = [1 if k < active else 0 for k in range(n)]
+    c = [rng.randrange(4) for _ in range(n)]
+    return data, c, de
+
+
+def test_tmds_rtl_equals_the_model_bit_for_bit():
+    """Three lines of random data and controls, and the bytes that stress the disparity
+    (0x00, 0xFF, alternating): every symbol equal to the model written from DVI 1.0's flow
+    chart."""
+    rng = random.Random(1)
+    data, c, de = [], [], []
+    for _ in range(3):
+        d, cc, e = _line(rng)
+        data += d; c += cc; de += e
+    data += [0x00, 0xFF, 0x55, 0xAA, 0x0F, 0xF0] * 40
+    c += [0] * 240
+    de += [1] * 240
+    assert _tmds_rtl(data, c, de) == encode(data, c, de)
+
+
+def test_tmds_control_tokens_and_decoding():
+    """Blanking sends DVI 1.0's four tokens by (c1, c0); every byte decodes back whatever
+    the running disparity before it (each byte after every other byte, 65,536 pairs)."""
+    assert encode([0] * 4, [0, 1, 2, 3], [0] * 4) == list(CONTROL)
+    assert [decode(t) for t in CONTROL] == [("control", k) for k in range(4)]
+    for a in range(256):
+        seq = [a] * 2 + list(range(256))
+        sym = encode(seq, [0] * len(seq), [1] * len(seq))
+        assert [decode(s) for s in sym] == [("data", v) for v in seq]
+
+
+def test_tmds_dc_balance_over_a_line():
+    """The running disparity of a line's data symbols stays in [-8, 8] (derived in
+    board/tmds.py: with cnt > 0 no branch adds, with cnt < 0 none takes, a step moves at most
+    10 from an even value), on random lines and on runs of the most unbalanced bytes; and the
+    RTL's own stream keeps it."""
+    rng = random.Random(2)
+    lines = [_line(rng)[0][:640] for _ in range(20)]
+    lines += [[0x00] * 640, [0xFF] * 640, [0x00, 0xFF] * 320, [0x01, 0xFE] * 320]
+    for line in lines:
+        run = np.cumsum([disparity(s) for s in encode(line, [0] * 640, [1] * 640)])
+        assert -8 <= run.min() and run.max() <= 8, (line[:4], run.min(), run.max())
+    rtl = _tmds_rtl(lines[0], [0] * 640, [1] * 640)
+    run = np.cumsum([disparity(s) for s in rtl])
+    assert -8 <= run.min() and run.max() <= 8
+
+
+# ---- UART -----------------------------------------------------------------------------------
+
+def _line_bits(byte, stop=1):
+    return [0] + [(byte >> k) & 1 for k in range(8)] + [stop]
+
+
+def test_uart_receives_at_the_bit_level_with_baud_error():
+    """Bytes driven onto the line bit by bit at the divisor x (1 +- 2 %) clocks a bit (a
+    real FT231X's rate against the PLL's), a glitch shorter than half a bit, and a byte with a
+    low stop bit: every byte received, the glitch ignored, the bad byte counted and dropped."""
+    div = 16
+    dut = UARTRx(div)
+    rng = random.Random(3)
+    sent = [rng.randrange(256) for _ in range(40)]
+    got = []
+
+    async def drive(ctx):
+        ctx.set(dut.rx, 1)
+        await ctx.tick().repeat(20)
+        ctx.set(dut.rx, 0)                       # a glitch: 3 clocks low
+        await ctx.tick().repeat(3)
+        ctx.set(dut.rx, 1)
+        await ctx.tick().repeat(3 * div)
+        for k, byte in enumerate(sent + [0x5A]):
+            rate = div * (1.02 if k % 2 else 0.98)
+            bits = _line_bits(byte, stop=0 if k == len(sent) else 1)
+            t = 0.0
+            for b in bits:
+                ctx.set(dut.rx, b)
+                t += rate
+                await ctx.tick().repeat(int(round(t)) - int(round(t - rate)))
+            ctx.set(dut.rx, 1)
+            await ctx.tick().repeat(2 * div)
+
+    async def take(ctx):
+        ctx.set(dut.o.ready, 1)
+        async for _, _, v, p in ctx.tick().sample(dut.o.valid, dut.o.payload):
+            if v:
+                got.append(p)
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_testbench(drive)
+    sim.add_testbench(take, background=True)
+    sim.run()
+    assert got == sent
+    assert sim is not None
+
+
+def test_uart_framing_error_counted():
+    div = 8
+    dut = UARTRx(div)
+    seen = {}
+
+    async def drive(ctx):
+        ctx.set(dut.rx, 1)
+        await ctx.tick().repeat(10)
+        for b in _line_bits(0x33, stop=0) + [1] * 3 + _line_bits(0x44):
+            ctx.set(dut.rx, b)
+            await ctx.tick().repeat(div)
+        ctx.set(dut.rx, 1)
+        await ctx.tick().repeat(3 * div)
+        seen["framing"] = ctx.get(dut.framing)
+        seen["last"] = ctx.get(dut.o.payload)
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_testbench(drive)
+    sim.run()
+    assert seen == {"framing": 1, "last": 0x44}
+
+
+def test_uart_transmits_at_the_bit_level():
+    """The transmitter's line sampled at each bit's middle: start, 8 bits LSB first, stop."""
+    div = 10
+    dut = UARTTx(div)
+    sent = [0x00, 0xFF, 0xA5, 0x3C, 0x81]
+    line = []
+
+    async def feed(ctx):
+        for b in sent:
+            ctx.set(dut.i.payload, b)
+            ctx.set(dut.i.valid, 1)
+            await ctx.tick().until(dut.i.ready)
+            await ctx.tick()
+            ctx.set(dut.i.valid, 0)
+        await ctx.tick().repeat(12 * div)
+
+    async def watch(ctx):
+        async for _, _, tx in ctx.tick().sample(dut.tx):
+            line.append(tx)
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_testbench(feed)
+    sim.add_testbench(watch, background=True)
+    sim.run()
+    got, k = [], 0
+    while k < len(line):                      # an independent receiver on the samples
+        if line[k] == 0:
+            mid = k + div // 2
+            bits = [line[mid + j * div] for j in range(10)]
+            assert bits[0] == 0 and bits[9] == 1, bits
+            got.append(sum(b << j for j, b in enumerate(bits[1:9])))
+            k = mid + 9 * div
+        k += 1
+    assert got == sent
+
+
+# ---- the link -------------------------------------------------------------------------------
+
+def _link_run(frames, tri_bits=20, known=((0, 4), (0x10000, 16)), buffer=64, timeout=60,
+              gap=0):
+    """Bytes of ``frames`` (a gap of ``gap`` + timeout clocks after each) into a Link;
+    returns (rows, replies, clears)."""
+    dut = Link(tri_bits, known, buffer, timeout)
+    rows, tx, clears = [], [], []
+
+    async def bench(ctx):
+        for fr in frames:
+            for b in fr:
+                ctx.set(dut.i.valid, 1)
+                ctx.set(dut.i.payload, b)
+                await ctx.tick()
+                ctx.set(dut.i.valid, 0)
+                await ctx.tick().repeat(2)
+            await ctx.tick().repeat(timeout + gap + 4 * REPLY_BYTES + 8 * buffer)
+
+    async def sink(ctx):
+        ctx.set(dut.tx.ready, 1)
+        ctx.set(dut.drained, 1)
+        rng = random.Random(5)
+        async for _, _, ov, op, tv, tp, cl, co in ctx.tick().sample(
+                dut.o.valid, dut.o.payload, dut.tx.valid, dut.tx.payload, dut.clear,
+                dut.colour):
+            if ov and ctx.get(dut.o.ready):
+                pass
+            ctx.set(dut.o.ready, rng.random() < 0.7)       # backpressure from the pipeline
+            if tv:
+                tx.append(tp)
+            if cl:
+                clears.append(co)
+
+    async def take(ctx):
+        async for _, _, ov, rd, op in ctx.tick().sample(dut.o.valid, dut.o.ready,
+                                                         dut.o.payload):
+            if ov and rd:
+                rows.append((op.cmd, op.tri if not op.cmd else (op.addr, op.data)))
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.add_testbench(sink, background=True)
+    sim.add_testbench(take, background=True)
+    sim.run()
+    replies = [parse_reply(tx[k:k + REPLY_BYTES]) for k in range(0, len(tx), REPLY_BYTES)]
+    return rows, replies, clears
+
+
+def _raw_frame(kind, seq, payload):
+    """A frame of any kind byte, with a good CRC (``board.protocol.frame`` knows the kinds)."""
+    body = struct.pack("<BBH", kind, seq, len(payload)) + payload
+    return bytes(SYNC) + body + struct.pack("<H", crc16(body))
+
+
+def _tris(values, nbytes=3):
+    return b"".join(v.to_bytes(nbytes, "little") for v in values)
+
+
+def test_link_applies_good_frames_under_backpressure():
+    """Writes to known addresses and triangles, in order, each row once, with the pipeline's
+    ready low 30 % of the clocks; a reply per frame."""
+    writes = b"".join(Encoder.writes([1, 0x10005, 3], [7, 0xDEADBEEF, 9]))
+    tris = [0x12345, 0xFFFFF, 0x00001, 0x54321]
+    rows, replies, _ = _link_run([frame("writes", 1, writes), frame("triangles", 2, _tris(tris)),
+                                  frame("status", 3)])
+    assert rows == [(1, (1, 7)), (1, (0x10005, 0xDEADBEEF)), (1, (3, 9))] + \
+        [(0, t) for t in tris]
+    assert [(r["seq"], r["result"]) for r in replies] == [(1, "ok"), (2, "ok"), (3, "ok")]
+    assert replies[-1]["good"] == 3
+
+
+BAD = {   # what goes wrong: (the bytes, the counter that counts it, the reply's result)
+    "bit error": (lambda: bytes(b ^ (4 if k == 9 else 0) for k, b in
+                               enumerate(frame("triangles", 9, _tris([1, 2])))), "crc", "crc"),
+    "cut frame": (lambda: frame("triangles", 9, _tris([1, 2, 3]))[:10], "cut", "cut"),
+    "noise": (lambda: bytes([0x00, 0x13, 0xA5, 0x77, 0xFF, 0x5A]), "noise", None),
+    "unknown address": (lambda: frame("writes", 9, b"".join(Encoder.writes([0x20000], [1]))),
+                        "unknown", "ok"),
+    "longer than the buffer": (lambda: frame("triangles", 9, _tris(range(30))), "long", "long"),
+    "unknown kind": (lambda: _raw_frame(9, 9, b""), "kind", "kind"),
+    "not whole records": (lambda: frame("triangles", 9, b"\x01\x02\x03\x04"), "kind", "kind"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_link_rejects_bad_input_and_takes_the_next_frame(case):
+    """Each kind of bad input is counted, applies nothing, and the good frame after it is
+    taken whole."""
+    make, counter, result = BAD[case]
+    good = frame("triangles", 10, _tris([0xABCDE, 0x13579]))
+    rows, replies, _ = _link_run([make(), good])
+    assert rows == [(0, 0xABCDE), (0, 0x13579)]
+    assert replies[-1]["seq"] == 10 and replies[-1]["result"] == "ok"
+    assert replies[-1][counter] >= 1, replies[-1]
+    if result is not None:
+        assert replies[0]["result"] == result and replies[0]["seq"] == 9
+    others = [c for c in COUNTERS if c not in (counter, "good", "noise")]
+    assert all(replies[-1][c] == 0 for c in others), replies[-1]
+
+
+def test_link_clear_waits_for_the_pipeline_and_carries_the_colour():
+    rows, replies, clears = _link_run([frame("clear", 4, struct.pack("<H", 0xF81F))])
+    assert clears == [0xF81F] and replies[0]["result"] == "ok" and rows == []
+
+
+# ---- the framebuffer ------------------------------------------------------------------------
+
+def _framebuffer_rtl(W, H, frags, p_valid=0.8, seed=4):
+    dut = Framebuffer(W, H, 8, 8)
+    img = np.zeros((H, W, 3), np.uint8)
+    n = len(frags["x"])
+    rng = random.Random(seed)
+    done = {}
+
+    async def bench(ctx):
+        ctx.set(dut.colour, 0x1234)
+        ctx.set(dut.clear, 1)
+        await ctx.tick()
+        ctx.set(dut.clear, 0)
+        await ctx.tick().until(~dut.busy)
+        k = 0
+        while k < n:
+            ctx.set(dut.i.valid, rng.random() < p_valid)
+            for f in frags:
+                ctx.set(dut.i.payload[f], int(frags[f][k]))
+            _, _, v, r = await ctx.tick().sample(dut.i.valid, dut.i.ready)
+            k += bool(v and r)
+        ctx.set(dut.i.valid, 0)
+        await ctx.tick().until(~dut.busy)
+        done["t"] = True
+        for y in range(H):
+            for x in range(W):
+                ctx.set(dut.rd_addr, y * dut.w2 + x)
+                await ctx.tick("pixel")
+                await ctx.tick("pixel")
+                img[y, x] = expand565(ctx.get(dut.rd_data))
+        done["outside"] = ctx.get(dut.outside)
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_clock(4e-8, domain="pixel")
+    sim.add_testbench(bench)
+    sim.run()
+    return img, done["outside"]
+
+
+def test_framebuffer_depth_test_equals_its_model():
+    """1,500 fragments on a 12 x 10 image (a 16-wide plane), many back to back on one pixel
+    (the read-modify-write hazard), ties, the least depth, and fragments outside the image:
+    the plane equals the model's (scene/framebuffer.py) pixel for pixel."""
+    rng = random.Random(6)
+    W, H, n = 12, 10, 1500
+    frags = {"x": [], "y": [], "depth": [], "r": [], "g": [], "b": []}
+    for k in range(n):
+        if k and rng.random() < 0.5:                 # the same pixel as the one before
+            frags["x"].append(frags["x"][-1]); frags["y"].append(frags["y"][-1])
+        else:
+            frags["x"].append(rng.randrange(14)); frags["y"].append(rng.randrange(11))
+        frags["depth"].append(rng.choice([rng.randrange(-32768, 32768), rng.randrange(-2, 3),
+                                          -32768, -32767]))
+        for c in "rgb":
+            frags[c].append(rng.randrange(256))
+    img, outside = _framebuffer_rtl(W, H, frags, p_valid=0.9)
+    model = board_frame((W, H), {k: np.array(v) for k, v in frags.items()},
+                        expand565(0x1234) / 255)
+    assert (img == model).all(), np.argwhere((img != model).any(-1))[:5]
+    assert outside == sum(x >= W or y >= H for x, y in zip(frags["x"], frags["y"]))
