@@ -16,7 +16,9 @@ A frame is stored whole, checked, and only then applied, so a bad one is never h
   line is quiet (``timeout`` clocks without a byte);
 - a frame cut short: rejected when the line is quiet for ``timeout`` clocks inside it;
 - bytes outside a frame (noise): counted and dropped until the next sync;
-- a write to an address that the pipeline's map does not name: counted, and not sent on.
+- a write to an address that the pipeline's map does not name: counted, and not sent on;
+- a triangle that ``reject`` marks (the top's test: every vertex beyond one edge of the
+  image, so it covers no pixel of it): counted (``offscreen``), and not sent on.
 
 Every frame that got as far as its header is answered on ``tx`` with a reply (``REPLY``):
 its seq, its result (``RESULTS``) and the counters. A good frame is answered once its last
@@ -38,7 +40,7 @@ SYNC = (0xA5, 0x5A)
 KINDS = {"triangles": 1, "writes": 2, "clear": 3, "status": 4}
 RESULTS = ("ok", "crc", "cut", "long", "kind")
 # the reply's counters (u16 each, after magic, seq and result)
-COUNTERS = ("good", "crc", "cut", "long", "kind", "unknown", "noise", "dropped")
+COUNTERS = ("good", "crc", "cut", "long", "kind", "unknown", "offscreen", "noise", "dropped")
 REPLY_MAGIC = 0xC3
 REPLY_BYTES = 3 + 2 * len(COUNTERS)
 WRITE_BYTES = 7                               # addr u24, data u32
@@ -68,7 +70,8 @@ def row_layout(tri_bits):
 class Link(wiring.Component):
     """``i``: bytes from the UART; ``o``: host-port rows; ``tx``: reply bytes; ``clear``: a
     pulse with ``colour`` when a clear frame applies, after ``drained`` (nothing in the
-    pipeline or the framebuffer)."""
+    pipeline or the framebuffer); ``reject``: the top's verdict on the triangle that ``o``
+    holds (combinational, from ``o.payload``)."""
 
     def __init__(self, tri_bits, known, buffer=2048, timeout=1 << 16):
         self.tri_bits = tri_bits
@@ -82,7 +85,7 @@ class Link(wiring.Component):
             "i": In(stream.Signature(8)),
             "o": Out(stream.Signature(row_layout(tri_bits))),
             "tx": Out(stream.Signature(8)),
-            "drained": In(1), "clear": Out(1), "colour": Out(16),
+            "drained": In(1), "clear": Out(1), "colour": Out(16), "reject": In(1),
             "counters": Out(data.ArrayLayout(16, len(COUNTERS))),
             "frames": Out(16),                 # replies sent
         })
@@ -132,6 +135,9 @@ class Link(wiring.Component):
         for base, count in self.known:
             known = known | ((addr >= base) & (addr < base + count))
 
+        # the row: the record as it stands (offered in EMIT only)
+        m.d.comb += [self.o.payload.cmd.eq(~is_tri), self.o.payload.tri.eq(rec[:self.tri_bits]),
+                     self.o.payload.addr.eq(addr), self.o.payload.data.eq(wdata)]
         with m.FSM() as fsm:
             with m.State("HUNT"):
                 with m.If(take):
@@ -217,10 +223,11 @@ class Link(wiring.Component):
                     m.next = "READ"
             with m.State("EMIT"):
                 m.d.sync += nb.eq(0)
-                with m.If(is_tri | known):
-                    m.d.comb += [self.o.valid.eq(1), self.o.payload.cmd.eq(~is_tri),
-                                 self.o.payload.tri.eq(rec[:self.tri_bits]),
-                                 self.o.payload.addr.eq(addr), self.o.payload.data.eq(wdata)]
+                with m.If(is_tri & self.reject):
+                    m.d.sync += n["offscreen"].eq(n["offscreen"] + 1)
+                    m.next = "READ"
+                with m.Elif(is_tri | known):
+                    m.d.comb += self.o.valid.eq(1)
                     with m.If(self.o.ready):
                         m.next = "READ"
                 with m.Else():

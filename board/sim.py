@@ -14,6 +14,7 @@ bit level on its own: tests/test_board.py). Out, in ``DIR``:
 """
 import hashlib
 import json
+import os
 import struct
 import subprocess
 import sys
@@ -44,9 +45,9 @@ class Noise(bytes):
     """Bytes on the line that are no frame: the host expects no reply."""
 
 
-def prepare(scene_path, size=None, board="ulx3s-25f"):
+def prepare(scene_path, size=None, board="ulx3s-25f", timeout=None):
     """A scene for the board: its image checked against the board's planes, its bump map on
-    chip. Returns (prep, core)."""
+    chip. Returns (prep, core); ``timeout``: the link's quiet clocks (``BoardCore``)."""
     scene = S.load(scene_path)
     if size:
         scene["image"]["width"], scene["image"]["height"] = size
@@ -54,7 +55,7 @@ def prepare(scene_path, size=None, board="ulx3s-25f"):
     hardware = {"texture": "onchip"} if scene["bump"]["method"] != "none" else None
     prep = S.prepare(scene, hardware)
     W, H = prep["size"]
-    core = BoardCore(prep["params"], W, H, board)
+    core = BoardCore(prep["params"], W, H, board, timeout=timeout)
     return prep, core
 
 
@@ -75,7 +76,7 @@ def build(core):
             src.write_text(text)
             print(f"board: building the Verilator model (once; cached under {base})",
                   file=sys.stderr, flush=True)
-            opt = "-O1"
+            opt = os.environ.get("SHADE_BATCH_OPT", "-O1")     # the tests: -O0
             cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module",
                    "board_core", "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o",
                    "harness", "-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT",
@@ -92,9 +93,10 @@ def build(core):
     return exe
 
 
-def simulate(core, frames, progress=True):
+def simulate(core, frames, progress=True, pace=None, ratio=RATIO):
     """``frames`` through the core, each bytes (a frame: the host waits for its reply) or
-    ``Noise(bytes)`` (no reply); returns (symbols (N, 3), render clocks, reply bytes)."""
+    ``Noise(bytes)`` (no reply); returns (symbols (N, 3), render clocks, reply bytes).
+    ``pace``: core clocks a byte (the UART's by default); ``ratio``: pixel to core clocks."""
     exe = build(core)
     work = BUILD / "board" / "run"
     work.mkdir(parents=True, exist_ok=True)
@@ -103,12 +105,12 @@ def simulate(core, frames, progress=True):
     inp.write_bytes(struct.pack("<I", len(frames)) + b"".join(
         struct.pack("<I", len(f) | (1 << 31 if isinstance(f, Noise) else 0)) + bytes(f)
         for f in frames))
-    pace = 10 * divisor(BAUD)
+    pace = pace or 10 * divisor(BAUD)
     bar = None
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=len(frames), unit="frame", desc="board sim", file=sys.stderr)
-    p = subprocess.Popen([str(exe), str(inp), str(out), str(pace), *map(str, RATIO)],
+    p = subprocess.Popen([str(exe), str(inp), str(out), str(pace), *map(str, ratio)],
                          stderr=subprocess.PIPE, text=True)
     err = []
     for line in p.stderr:
@@ -158,16 +160,21 @@ def decode_frame(sym, timing=VGA):
     return img, errors
 
 
-def run(scene_path, out_dir, size=None, board="ulx3s-25f", progress=True):
-    """The whole check; writes the three files and returns board.json's contents."""
+def run(scene_path, out_dir, size=None, board="ulx3s-25f", progress=True, frames=None,
+        fast=False):
+    """The whole check; writes the three files and returns board.json's contents.
+    ``frames(encoder, prep)``: the link's traffic (by default ``encoder.scene(prep)``).
+    ``fast`` (the tests): bytes 12 clocks apart, the link quiet after 2,000 clocks, the pixel
+    clock half the core's, so the same checks take a fifth of the clocks."""
     from PIL import Image
     from sim.render import run_rtl
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    prep, core = prepare(scene_path, size, board)
-    frames = Encoder(core.pipe, core.buffer).scene(prep)
+    prep, core = prepare(scene_path, size, board, timeout=2000 if fast else None)
+    enc = Encoder(core.pipe, core.buffer)
+    frames = frames(enc, prep) if frames else enc.scene(prep)
     t0 = time.time()
-    sym, render, replies = simulate(core, frames, progress)
+    sym, render, replies = simulate(core, frames, progress, *((12, (1, 2)) if fast else ()))
     wall = time.time() - t0
     np.save(out_dir / "tmds.npy", sym)
     img, errors = decode_frame(sym)

@@ -30,6 +30,7 @@ __all__ = ["BoardCore", "BoardTop", "CLOCKS", "BAUD", "check_size"]
 # MHz: (the PLL's output, its divider from the 625 MHz VCO)
 CLOCKS = {"tmds": (125.0, 5), "pixel": (25.0, 25), "sync": (625 / 6, 6)}
 BAUD = 3_000_000                     # the FT231X's fastest
+QUIET_S = 0.01
 
 
 def divisor(baud=BAUD):
@@ -57,8 +58,10 @@ class BoardCore(wiring.Component):
         self.width, self.height = check_size(width, height, board)
         self.pipe = ScenePipeline.spec(**params)
         self.tri_bits = sum(f.fmt.width for f in self.pipe.raster.unit.inputs)
-        # the line is quiet for two bytes' time: a frame's bytes come back to back
-        self.timeout = timeout or 20 * divisor()
+        # the line quiet for 10 ms ends a frame: within a frame the FT231X's bytes come back
+        # to back but for its USB refills (a millisecond frame), so gaps inside a frame are
+        # shorter; a host waits 0.5 s for a reply
+        self.timeout = timeout or round(CLOCKS["sync"][0] * 1e6 * QUIET_S)
         self.buffer = buffer
         super().__init__({
             "rx_valid": In(1), "rx_data": In(8),
@@ -81,6 +84,7 @@ class BoardCore(wiring.Component):
         for f in self.pipe.raster.unit.inputs:
             m.d.comb += pipe.i.payload[f.name].eq(row.tri[shift:shift + f.fmt.width])
             shift += f.fmt.width
+        m.d.comb += link.reject.eq(self._offscreen(pipe.i.payload))
         m.d.comb += [pipe.i.payload.cmd.eq(row.cmd), pipe.i.payload.addr.eq(row.addr),
                      pipe.i.payload.data.eq(row.data), pipe.i.valid.eq(link.o.valid),
                      link.o.ready.eq(pipe.i.ready)]
@@ -103,6 +107,18 @@ class BoardCore(wiring.Component):
                      self.counters.eq(link.counters.as_value()),
                      self.busy.eq(pipe.busy | fb.busy | link.o.valid)]
         return m
+
+
+    def _offscreen(self, tri):
+        """Every vertex beyond one edge of the image: no pixel centre of it is covered (a
+        centre x + 1/2 inside the triangle is at least its least vertex x)."""
+        S = 1 << self.params["sub_bits"]
+        xs = [tri[f"x{k}"] for k in range(3)]
+        ys = [tri[f"y{k}"] for k in range(3)]
+        beyond = lambda vs, test: test(vs[0]) & test(vs[1]) & test(vs[2])
+        return (beyond(xs, lambda v: v < 0) | beyond(ys, lambda v: v < 0)
+                | beyond(xs, lambda v: v >= self.width * S)
+                | beyond(ys, lambda v: v >= self.height * S))
 
 
 class BoardTop(wiring.Component):
@@ -141,7 +157,7 @@ class BoardTop(wiring.Component):
             o_CLKOP=clocks["tmds"], o_CLKOS=clocks["pixel"], o_CLKOS2=clocks["sync"],
             o_LOCK=locked)
         for name, clk in clocks.items():
-            m.domains[name] = ClockDomain(name)
+            m.domains += ClockDomain(name)
             m.d.comb += ClockSignal(name).eq(clk)
             m.submodules[f"rst_{name}"] = ResetSynchronizer(~locked, domain=name)
             platform.add_clock_constraint(clk, CLOCKS[name][0] * 1e6)
