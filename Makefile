@@ -11,7 +11,7 @@ WAVES   ?=
 # Two pytest workers: CI has two cores.
 JOBS    ?= 2
 
-.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga formal fuzz tradeoffs texcache turntable clean
+.PHONY: setup render gallery test verilog sim report accuracy recip-cost bench soak fpga formal fuzz tradeoffs texcache turntable board-sim bitstream clean
 
 setup: $(STAMP)
 
@@ -32,6 +32,19 @@ render: setup
 # Every scene in scenes/, and one contact sheet: build/render/gallery.png.
 gallery: setup
 	$(PY) -m sim.render $(if $(filter command line,$(origin SIM)),$(SIM),verilator)
+
+# The ULX3S (docs/board.md). A scene through the board's core on Verilator, its link bytes in
+# and one whole video frame's TMDS symbols out, decoded and held to the model:
+# make board-sim [SCENE=board/scenes/default.toml] -> build/board_sim/<scene>/{tmds.npy,frame.png,board.json}
+# The bitstream of a scene's effects: make bitstream [SCENE=...] [BOARD=ulx3s-25f|ulx3s-85f]
+# -> build/bitstream/<scene>/{<name>.bit,report.json,logs}. Run it alone: tens of minutes.
+BOARD   ?= ulx3s-25f
+BSCENE  := $(if $(filter command line,$(origin SCENE)),$(SCENE),board/scenes/default.toml)
+board-sim: setup
+	$(PY) -m board sim $(BSCENE) --board $(BOARD) --out build/board_sim/$(basename $(notdir $(BSCENE)))
+
+bitstream: setup
+	timeout 2400 $(PY) -m board build $(BSCENE) --board $(BOARD) --out build/bitstream/$(basename $(notdir $(BSCENE)))
 
 # Every test: models, RTL on Amaranth's simulator, cocotb on Icarus and Verilator.
 test: setup

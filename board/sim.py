@@ -168,9 +168,9 @@ def run(scene_path, out_dir, size=None, board="ulx3s-25f", progress=True, frames
     clock half the core's, so the same checks take a fifth of the clocks."""
     from PIL import Image
     from sim.render import run_rtl
+    prep, core = prepare(scene_path, size, board, timeout=2000 if fast else None)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    prep, core = prepare(scene_path, size, board, timeout=2000 if fast else None)
     enc = Encoder(core.pipe, core.buffer)
     frames = frames(enc, prep) if frames else enc.scene(prep)
     t0 = time.time()

@@ -404,3 +404,31 @@ def test_a_small_scene_through_the_board_core_decodes_to_the_model(tmp_path):
     assert counts["noise"] >= 5
     sym = np.load(tmp_path / "tmds.npy")
     assert sym.shape == (800 * 525, 3) and sym.dtype == np.uint16
+
+
+# ---- the command line -----------------------------------------------------------------------
+
+def _board_cli(*args):
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "board", *args], capture_output=True,
+                          text=True)
+
+
+def test_a_scene_too_large_for_the_planes_is_refused_in_one_line(tmp_path):
+    """256 x 256 needs 65,536 words a plane; the 25F's block RAM holds 16,384 beside the
+    pipeline: one line naming the keys and the limit, exit 2, nothing written."""
+    r = _board_cli("sim", str(SCENES / "default.toml"), "--out", str(tmp_path / "o"))
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "image.width and image.height" in lines[0] \
+        and "16384" in lines[0], r.stderr
+    assert not (tmp_path / "o" / "tmds.npy").exists()
+
+
+def test_board_cli_rejects_bad_arguments_in_one_line(tmp_path):
+    r = _board_cli("sim", str(SCENES / "default.toml"), "--out", str(tmp_path), "--size",
+                   "12by12")
+    assert r.returncode == 2 and r.stderr.strip().count("\n") == 0 and "--size" in r.stderr
+    r = _board_cli("program", str(tmp_path / "missing.bit"))
+    assert r.returncode == 2 and r.stderr.strip().count("\n") == 0
