@@ -26,11 +26,12 @@ import numpy as np
 
 from scene import driver as S
 from scene.framebuffer import board_frame, screen
-from sim.verilog import BUILD, build_lock, prune_objects, verilator_env
+from sim.batch import verilate
+from sim.verilog import BUILD, build_lock
 
 from .link import REPLY_BYTES
 from .protocol import Encoder, parse_reply
-from .tmds import CONTROL, decode
+from .tmds import decode
 from .top import BAUD, CLOCKS, BoardCore, divisor
 from .video import VGA, placement
 
@@ -67,7 +68,8 @@ def build(core):
     base = BUILD / "board" / f"core-{tag}"
     exe = base / "obj" / "harness"
     with build_lock(base.parent / f"{base.name}.lock"):
-        stamp = hashlib.sha1(json.dumps([text, HARNESS.read_text(),
+        opt = os.environ.get("SHADE_BATCH_OPT", "-O1")         # the tests: -O0
+        stamp = hashlib.sha1(json.dumps([text, HARNESS.read_text(), opt,
                                          version("verilator")]).encode()).hexdigest()
         done = base / "obj" / "stamp"
         if not (exe.exists() and done.exists() and done.read_text() == stamp):
@@ -76,19 +78,7 @@ def build(core):
             src.write_text(text)
             print(f"board: building the Verilator model (once; cached under {base})",
                   file=sys.stderr, flush=True)
-            opt = os.environ.get("SHADE_BATCH_OPT", "-O1")     # the tests: -O0
-            cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module",
-                   "board_core", "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o",
-                   "harness", "-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT",
-                   "--x-assign", "fast", "--x-initial", "fast", "-CFLAGS", opt,
-                   "-MAKEFLAGS", f"OPT_FAST={opt} OPT_SLOW={opt} OPT_GLOBAL={opt}",
-                   str(src), str(HARNESS)]
-            r = subprocess.run(cmd, env=verilator_env(), capture_output=True, text=True)
-            (base / "build.log").write_text(r.stdout + r.stderr)
-            if r.returncode != 0:
-                raise RuntimeError(f"Verilator build of the board core failed (log: "
-                                   f"{base / 'build.log'}):\n{(r.stdout + r.stderr)[-3000:]}")
-            prune_objects(base / "obj")
+            verilate("board_core", src, HARNESS, base, opt, opt)
             done.write_text(stamp)
     return exe
 

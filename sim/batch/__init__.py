@@ -121,6 +121,21 @@ def held_stages(unit, message):
                            (", ".join(names) or "none"))
 
 
+def verilate(top, src, harness, base, cflags, opt, extra=()):
+    """``src`` (top module ``top``) and the C++ ``harness`` into ``base/obj/harness``; the
+    log in ``base/build.log``; the intermediates pruned."""
+    cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module", top,
+           "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o", "harness",
+           *WARNINGS, *SPEED, "-CFLAGS", cflags, "-MAKEFLAGS",
+           f"OPT_FAST={opt} OPT_SLOW={opt} OPT_GLOBAL={opt}", *extra, str(src), str(harness)]
+    r = subprocess.run(cmd, env=verilator_env(), capture_output=True, text=True)
+    (base / "build.log").write_text(r.stdout + r.stderr)
+    if r.returncode != 0:
+        raise BatchError(f"Verilator build of {top} failed (log: {base / 'build.log'}):"
+                         f"\n{(r.stdout + r.stderr)[-3000:]}")
+    prune_objects(base / "obj")
+
+
 def build(name, params, *, trace=False):
     """Build (or find in the cache) the harness for a unit; returns the executable's path."""
     key = (name, json.dumps(params, sort_keys=True), trace)
@@ -141,17 +156,8 @@ def build(name, params, *, trace=False):
             t0 = time.time()
             print(f"{name}: building the batch Verilator model (once; cached under {base})",
                   file=sys.stderr, flush=True)
-            cmd = ["verilator", "--cc", "--exe", "--build", "-j", "2", "--top-module", name,
-                   "--prefix", "Vtop", "-Mdir", str(base / "obj"), "-o", "harness",
-                   *WARNINGS, *SPEED, "-CFLAGS", f"-I{base} {OPT} {ARCH}", "-MAKEFLAGS",
-                   f"OPT_FAST={OPT} OPT_SLOW={OPT} OPT_GLOBAL={OPT}",
-                   *(["--trace"] if trace else []), str(src), str(HARNESS)]
-            r = subprocess.run(cmd, env=verilator_env(), capture_output=True, text=True)
-            (base / "build.log").write_text(r.stdout + r.stderr)
-            if r.returncode != 0:
-                raise BatchError(f"Verilator build of {name} failed (log: {base / 'build.log'}):"
-                                 f"\n{(r.stdout + r.stderr)[-3000:]}")
-            prune_objects(base / "obj")
+            verilate(name, src, HARNESS, base, f"-I{base} {OPT} {ARCH}", OPT,
+                     ["--trace"] if trace else [])
             done.write_text(stamp)
             (base / "obj" / "build_seconds").write_text(f"{time.time() - t0:.1f}")
             print(f"{name}: batch model built in {time.time() - t0:.1f} s", file=sys.stderr,
