@@ -188,16 +188,29 @@ def parse(data, name="scene", base=None):
     return scene
 
 
+MAX_SCENE_BYTES = 1 << 20      # a scene is a few hundred bytes; its mesh is a file of its own
+
+
 def load(path):
+    """Read and validate a scene file. Whatever the file holds, a failure is one
+    ``SceneError`` naming the file: tomllib's own limits (nesting past Python's recursion
+    limit) and sizes no scene needs are caught here, where the file is read."""
     path = Path(path)
     try:
-        text = path.read_bytes()
+        with open(path, "rb") as f:
+            text = f.read(MAX_SCENE_BYTES + 1)
     except OSError as e:
         raise SceneError(f"{path}: cannot read the scene file ({e.strerror})") from None
+    if len(text) > MAX_SCENE_BYTES:
+        raise SceneError(f"{path}: larger than {MAX_SCENE_BYTES} bytes; a scene file is "
+                         f"a few hundred (a mesh goes in its own file: mesh.file)")
     try:
         data = tomllib.loads(text.decode("utf-8"))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
         raise SceneError(f"{path}: not a valid TOML file: {e}") from None
+    except RecursionError:
+        raise SceneError(f"{path}: not a valid scene file: arrays or tables nested too "
+                         f"deeply to read") from None
     return parse(data, path.stem, path.parent)
 
 

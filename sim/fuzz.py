@@ -6,7 +6,8 @@ Scenes, by class:
   key given a value of another type), ``range`` (out of its range), ``nonfinite`` (nan, inf),
   ``unknown`` (a key or table no scene has), ``degenerate`` (zero vectors, the eye at the
   target, up along the view), ``file`` (a bump map or OBJ that is missing, a directory, not an
-  image, a 1 x 1 image, a corrupt npz);
+  image, a 1 x 1 image, a corrupt npz), ``huge`` (TOML extreme in nesting or size: arrays and
+  inline tables nested up to 50,000 deep, megabytes of string or keys);
 - ``hard``, valid: cameras inside the mesh and far away, dense meshes, sub-pixel and
   screen-sized triangles, lights behind the surface, every method and bump method.
 
@@ -144,7 +145,7 @@ def malformed_scene(draw, tmp):
     base = draw(valid_scene())
     base["lights"] = base["lights"][:1]       # so that the defect is the file's only one
     kind = draw(st.sampled_from(["syntax", "type", "range", "nonfinite", "unknown",
-                                 "degenerate", "file", "extreme"]))
+                                 "degenerate", "file", "extreme", "huge"]))
     table, key = draw(st.sampled_from(_keys()))
     path = f"lights[0].{key}" if table == "lights" else f"{table}.{key}"
 
@@ -153,6 +154,19 @@ def malformed_scene(draw, tmp):
             base["lights"][0][key] = value
         else:
             base.setdefault(table, {})[key] = value
+    if kind == "huge":          # TOML extreme in nesting or size: the parser's own limits
+        text = tomli_w.dumps(base)
+        depth = draw(st.sampled_from([100, 1000, 5000, 50000]))
+        shape = draw(st.sampled_from(["array", "table", "string", "keys"]))
+        if shape == "array":
+            text += f"\n[extra]\nv = {'[' * depth}1{']' * depth}\n"
+        elif shape == "table":
+            text += f"\n[extra]\nv = {'{ a = ' * depth}1{' }' * depth}\n"
+        elif shape == "string":
+            text += f'\n[extra]\nv = "{"x" * depth * 40}"\n'
+        else:
+            text += "\n[extra]\n" + "".join(f"k{j} = {j}\n" for j in range(depth * 4))
+        return kind, text, None
     if kind == "syntax":
         text = tomli_w.dumps(base)
         at = draw(st.integers(0, len(text)))

@@ -17,8 +17,24 @@ def test_generated_scenes(tmp_path):
     assert not failures, failures[:3]
     kinds = {k for k, _ in counts}
     assert {"hard", "syntax", "type", "range", "nonfinite", "unknown", "degenerate",
-            "file", "extreme"} <= kinds, kinds
+            "file", "extreme", "huge"} <= kinds, kinds
     assert counts["hard", "ok"] > 20          # the valid scenes do render, not only fail
+
+
+@pytest.mark.parametrize("body", [
+    pytest.param("v = " + "[" * 50000 + "1" + "]" * 50000, id="arrays"),  # past the recursion limit
+    pytest.param("v = " + "{ a = " * 5000 + "1" + " }" * 5000, id="tables"),
+    pytest.param("v = \"" + "x" * (2 << 20) + "\"", id="megabytes"),   # no scene needs them
+])
+def test_toml_extreme_in_nesting_or_size_is_one_line(tmp_path, body):
+    """The class of scene file that gave tracebacks (issue 51): tomllib's recursion, and a
+    file of megabytes, each refused where the file is read, in one line naming it."""
+    from scene.driver import SceneError, load
+    path = tmp_path / "deep.toml"
+    path.write_text("[image]\nwidth = 64\n[extra]\n" + body + "\n")
+    with pytest.raises(SceneError) as e:
+        load(path)
+    assert str(path) in str(e.value) and "\n" not in str(e.value)
 
 
 @pytest.mark.skipif(bool(available("verilator")), reason=f"verilator: {available('verilator')}")
