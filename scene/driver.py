@@ -685,6 +685,26 @@ def polar_candidates(prep, frag, ch):
     return np.stack(out)
 
 
+def fenney_candidates(prep, frag, ch):
+    """phong with Fenney's power: every colour the RTL may give, (choices, n, 3). The power
+    takes X = floor(s / 16); phong's RTL is within its derived bound b of the float s the
+    model rounds, so where s lies within b of a multiple of 16 the RTL's X may be the next one
+    either way, and at high concentrations one step of X is up to 63/1024 of the power (C =
+    255, X 1021: 10 levels at ks 0.5 and a light of 1.3). Each light's s is tried at -b, 0
+    and +b (the ends of the interval reach every X in it); the colour is then within 1 level
+    of one of them."""
+    stages = prep["pipeline"].stages[1:]
+    phong = next(s for s in stages if s.name == "phong")
+    lights = prep["params"]["lights"]
+    b = phong.bounds(prep, ch)
+    out = []
+    for signs in np.ndindex(*(3,) * lights):
+        off = {k: (signs[k] - 1) * b[f"s{k}"] for k in range(lights)}
+        c = run_models(prep, frag, ch, stages, s_offset=off)
+        out.append(np.stack([c[x] for x in RGB], -1))
+    return np.stack(out).astype(np.int64)
+
+
 def shade_fragments(prep, ch, frag=None):
     """The stages after the raster and the bump stages (phong, the power, colour) on the
     values ``ch``: rgb (n, 3)."""

@@ -16,7 +16,9 @@ either give a clear error (one of the errors ``sim`` turns into one line and exi
 malformed scene, naming the key) or a picture. Anything else is a traceback: a bug. Valid
 scenes of a few pipeline configurations (``RTL_CONFIGS``, so the simulator models stay
 cached) also go through the RTL on the batch path: the same pixels as the model, each within
-one level (tests/test_scenes.py's bound), and no hang (the batch harness's watchdog).
+one level (tests/test_scenes.py's bound; phong with Fenney's power and fenney_polar: each
+fragment within its candidates, ``scene.driver.fenney_candidates`` and ``polar_candidates``),
+and no hang (the batch harness's watchdog).
 
 npz inputs: ``python -m sim run``, ``python -m golden run`` and ``python -m sim check`` (in
 process, through their ``main``) on malformed files: wrong types, shapes, lengths, missing and
@@ -120,8 +122,9 @@ def valid_scene(draw, config=None):
     if config:                                  # an RTL configuration: its effects, our data
         c = RTL_CONFIGS[config]
         d["shading"] = dict(c["shading"])
-        d["lights"] = d["lights"][:1] * c.get("lights", 1) if len(d["lights"]) < \
-            c.get("lights", 1) else d["lights"][:c.get("lights", 1)]
+        want = c.get("lights", 1)          # each light its own direction and colour
+        d["lights"] = (d["lights"] + [{"to_light": draw(vec3(-1, 1).filter(lambda v: any(v))),
+                                       "color": draw(vec3(0, 2))} for _ in range(want)])[:want]
         d["image"] = {"width": RTL_SIZE, "height": RTL_SIZE}
         d.pop("bump", None)
         if "bump" in c:                          # its method and size; our map and depth
@@ -321,12 +324,18 @@ def rtl_check(prep):
                           memory=memory)
     except (BatchError, StreamError) as e:
         return f"RTL: {e}"
-    if prep["bump"] is not None:         # fenney_polar: the same fragments, each a colour
-        frag, ch = S.model_fragments(prep)          # its bound allows
+    q = prep["params"]
+    fenney_phong = q["method"] == "phong" and q["specular"] and q["power"] == "fenney"
+    if prep["bump"] is not None or fenney_phong:   # the same fragments, each a colour its
+        frag, ch = S.model_fragments(prep)          # bound allows
         if not all(np.array_equal(out[k], frag[k]) for k in ("tri", "x", "y")):
             return f"fragments differ: {len(out['x'])} from the RTL, {len(frag['x'])} model"
         rtl = np.stack([out[c] for c in "rgb"], -1)
-        hit = (S.polar_candidates(prep, frag, ch) == rtl[None]).all(-1).any(0)
+        if fenney_phong:                # within 1 level of a colour its X steps allow
+            far = np.abs(S.fenney_candidates(prep, frag, ch) - rtl[None]).max(-1).min(0)
+            hit = far <= 1
+        else:                           # fenney_polar: exactly one of its candidates
+            hit = (S.polar_candidates(prep, frag, ch) == rtl[None]).all(-1).any(0)
         return None if hit.all() else f"{int((~hit).sum())} fragments outside the bound"
     img, cov, _ = S.model(prep)
     rgb = np.stack([out[c] for c in "rgb"], -1).astype(np.uint8)

@@ -65,3 +65,18 @@ def test_vertex_at_the_coordinate_fields_edge():
     from sim.fuzz import rtl_check
     prep = S.prepare(S.load("tests/data/fuzz_coordinate_edge.toml"))
     assert rtl_check(prep) is None
+
+
+@pytest.mark.skipif(bool(available("verilator")), reason=f"verilator: {available('verilator')}")
+def test_phong_fenney_two_lights_within_its_derived_bound():
+    """The scene of issue 51 (tests/data/phong_fenney_two_lights.toml): phong's RTL is within
+    its derived bound of the float s the model rounds, so where s lies that close to a
+    multiple of 16 the power's X = floor(s / 16) may be the next one, and at C = 255 one X
+    step is up to 63/1024 of the power. Each fragment is within 1 level of a colour that
+    those X steps allow (``scene.driver.fenney_candidates``), though not always of the
+    model's own: the bound this combination really has."""
+    from pathlib import Path
+    from sim.fuzz import rtl_check
+    from scene import driver as S
+    prep = S.prepare(S.load(Path(__file__).with_name("data") / "phong_fenney_two_lights.toml"))
+    assert rtl_check(prep) is None

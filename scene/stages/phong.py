@@ -59,10 +59,22 @@ class Phong(Stage):
                 ch[f"s{j}"] = n @ H
         return ch
 
-    def model(self, prep, frag, ch, bound):
-        ch = dict(ch)
-        inp = {k: raw(ch.pop(k)) for k in ("nx", "ny", "nz")}
+    def _inputs(self, prep, ch):
+        inp = {k: raw(ch[k]) for k in ("nx", "ny", "nz")}
         inp.update({f.name: np.full(len(inp["nx"]), prep["uniforms"][f.name])
                     for f in self.uniforms})
-        out, _ = shade.phong(inp, lights=self.q["lights"], specular=self.q["specular"])
+        return inp
+
+    def model(self, prep, frag, ch, bound):
+        out, _ = shade.phong(self._inputs(prep, ch), lights=self.q["lights"],
+                             specular=self.q["specular"])
+        ch = {k: v for k, v in ch.items() if k not in ("nx", "ny", "nz")}
         return {**ch, **{k: x * VALUE.lsb for k, x in out.items()}}
+
+    def bounds(self, prep, ch):
+        """Per output and fragment, how far (VALUE LSBs) the RTL may be from this model: the
+        unit's derived bound (``golden.shade.phong_check``)."""
+        inp = self._inputs(prep, ch)
+        want, _ = shade.phong(inp, lights=self.q["lights"], specular=self.q["specular"])
+        return {k: b for k, (_, b) in shade.phong_check(inp, want, lights=self.q["lights"],
+                                                         specular=self.q["specular"]).items()}

@@ -89,8 +89,9 @@ class Power(Stage):
 
     def model(self, prep, frag, ch, bound):
         q, ch = self.q, dict(ch)
+        nudge = bound.get("s_offset", {})      # LSBs added to s_k first (fenney_candidates)
         for k in range(q["lights"]):
-            s = raw(ch.pop(f"s{k}"))
+            s = raw(ch.pop(f"s{k}") + nudge.get(k, 0) * VALUE.lsb)
             ch[f"p{k}"] = shade.power_table(s, shininess(prep["scene"]), q["mant_bits"]) \
                 if q["power"] == "table" else \
                 fenney.power_int(np.clip(np.floor(s / 16), 0, 1023), prep["uniforms"]["conc"])
