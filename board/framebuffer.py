@@ -14,9 +14,10 @@ A clear writes the background and the depth ``CLEAR`` (the least s16) to every w
 clock. A fragment's depth is clamped to ``CLEAR + 1`` or more, so it always beats the clear;
 the model (scene/framebuffer.py) clamps the same.
 
-**Read-modify-write.** A fragment's depth is read in the clock it is taken and tested and
-written in the next. The fragment behind it reads in that same clock, before the write lands,
-so its test takes the written depth instead wherever the two share a pixel (``forward``).
+**Read-modify-write.** A fragment's depth is read in the clock it is taken, registered in the
+next (the block RAM's output is slow), tested in the third and written in the fourth. So the
+three fragments ahead of it write after its read: where one of them shares its pixel, its test
+takes that write's depth instead, the newest first (forwarding).
 Fragments outside the image are counted (``outside``) and dropped.
 """
 from amaranth.hdl import Cat, Module, Mux, Signal, signed
@@ -71,19 +72,38 @@ class Framebuffer(wiring.Component):
         addr = Cat(f.x[:(self.w2 - 1).bit_length()], f.y) if self.w2 > 1 else f.y
         m.d.comb += z_rd.addr.eq(addr)
 
-        # stage 1: the fragment whose depth is being read
-        v1, a1, d1, c1 = Signal(), Signal(range(self.words)), Signal(signed(16)), Signal(16)
+        # the fragment moves one stage a clock: 1 (its depth read out of the block RAM), 2
+        # (registered: the block's 5.8 ns clock-to-out leaves no time for the test after it),
+        # 3 (tested), then written in the clock after the test
         take = self.i.valid & self.i.ready
         depth = Mux(f.depth > CLEAR, f.depth, CLEAR + 1)
-        m.d.sync += [v1.eq(take & inside), a1.eq(addr), d1.eq(depth),
-                     c1.eq(Cat(f.b[3:], f.g[2:], f.r[3:]))]
+        stage = []
+        for k in (1, 2):
+            st = (Signal(name=f"v{k}"), Signal(range(self.words), name=f"a{k}"),
+                  Signal(signed(16), name=f"d{k}"), Signal(16, name=f"c{k}"))
+            src = (take & inside, addr, depth, Cat(f.b[3:], f.g[2:], f.r[3:])) if k == 1 \
+                else stage[-1]
+            m.d.sync += [dst.eq(x) for dst, x in zip(st, src)]
+            stage.append(st)
+        (v1, a1, d1, c1), (v2, a2, d2, c2) = stage
+        read = Signal(signed(16))
+        m.d.sync += read.eq(z_rd.data)               # stage 1's depth, in stage 2
         with m.If(take & ~inside):
             m.d.sync += self.outside.eq(self.outside + 1)
-        # the last clock's write, for the fragment behind it
-        fw, fa, fd = Signal(), Signal(range(self.words)), Signal(signed(16))
-        stored = Mux(fw & (fa == a1), fd, z_rd.data)
-        win = v1 & (d1 > stored)
-        m.d.sync += [fw.eq(win), fa.eq(a1), fd.eq(d1)]
+        # the writes stage 2's read missed: the one being made now (w) and the two before
+        # (h1, h2), the newest first where they share its pixel
+        w = (Signal(name="w_en"), Signal(range(self.words), name="w_addr"),
+             Signal(signed(16), name="w_depth"), Signal(16, name="w_rgb"))
+        h1 = (Signal(name="h1_en"), Signal(range(self.words), name="h1_addr"),
+              Signal(signed(16), name="h1_depth"))
+        h2 = (Signal(name="h2_en"), Signal(range(self.words), name="h2_addr"),
+              Signal(signed(16), name="h2_depth"))
+        stored = read
+        for en, a, d in (h2, h1, w[:3]):             # the oldest first: the newest wins
+            stored = Mux(en & (a == a2), d, stored)
+        win = v2 & (d2 > stored)
+        m.d.sync += [w[0].eq(win), w[1].eq(a2), w[2].eq(d2), w[3].eq(c2),
+                     *[x.eq(y) for x, y in zip(h1, w[:3])], *[x.eq(y) for x, y in zip(h2, h1)]]
         with m.If(win):
             m.d.sync += self.written.eq(self.written + 1)
 
@@ -94,9 +114,9 @@ class Framebuffer(wiring.Component):
             with m.If(ptr == self.words - 1):
                 m.d.sync += clearing.eq(0)
         with m.Else():
-            m.d.comb += [c_wr.addr.eq(a1), c_wr.data.eq(c1), c_wr.en.eq(win),
-                         z_wr.addr.eq(a1), z_wr.data.eq(d1), z_wr.en.eq(win)]
+            m.d.comb += [c_wr.addr.eq(w[1]), c_wr.data.eq(w[3]), c_wr.en.eq(w[0]),
+                         z_wr.addr.eq(w[1]), z_wr.data.eq(w[2]), z_wr.en.eq(w[0])]
         with m.If(self.clear & ~clearing):
             m.d.sync += [clearing.eq(1), ptr.eq(0)]
-        m.d.comb += self.busy.eq(clearing | v1)
+        m.d.comb += self.busy.eq(clearing | v1 | v2 | w[0])
         return m

@@ -104,6 +104,7 @@ class Link(wiring.Component):
         rec_bytes = max(self.tri_bytes, WRITE_BYTES)
         rec, nb = Signal(8 * rec_bytes), Signal(range(rec_bytes + 1))
         part = Signal(range(rec_bytes))          # payload bytes past the last whole record
+        rejected, unknown = Signal(), Signal()    # the record's verdicts (JUDGE)
         byte = self.i.payload
         take = self.i.valid                         # the input is never stalled
         m.d.comb += self.i.ready.eq(1)
@@ -218,15 +219,18 @@ class Link(wiring.Component):
             with m.State("TAKE"):
                 m.d.sync += [rec.word_select(nb, 8).eq(rd.data), nb.eq(nb + 1)]
                 with m.If(nb + 1 == size):
-                    m.next = "EMIT"
+                    m.next = "JUDGE"
                 with m.Else():
                     m.next = "READ"
+            with m.State("JUDGE"):           # the record's verdicts, registered
+                m.d.sync += [rejected.eq(is_tri & self.reject), unknown.eq(~is_tri & ~known)]
+                m.next = "EMIT"
             with m.State("EMIT"):
                 m.d.sync += nb.eq(0)
-                with m.If(is_tri & self.reject):
+                with m.If(rejected):
                     m.d.sync += n["offscreen"].eq(n["offscreen"] + 1)
                     m.next = "READ"
-                with m.Elif(is_tri | known):
+                with m.Elif(~unknown):
                     m.d.comb += self.o.valid.eq(1)
                     with m.If(self.o.ready):
                         m.next = "READ"
@@ -258,8 +262,8 @@ class Link(wiring.Component):
                         m.d.sync += self.frames.eq(self.frames + 1)
                         m.next = "HUNT"
         # bytes that arrive while a frame is checked, applied or answered: not taken
-        applying = Cat(*(fsm.ongoing(s) for s in ("CHECK", "READ", "TAKE", "EMIT", "CLEAR",
-                                                  "CLEARED", "REPLY"))).any()
+        applying = Cat(*(fsm.ongoing(s) for s in ("CHECK", "READ", "TAKE", "JUDGE", "EMIT",
+                                                  "CLEAR", "CLEARED", "REPLY"))).any()
         with m.If(take & applying):
             m.d.sync += n["dropped"].eq(n["dropped"] + 1)
         return m

@@ -160,7 +160,8 @@ class BoardTop(wiring.Component):
             m.domains += ClockDomain(name)
             m.d.comb += ClockSignal(name).eq(clk)
             m.submodules[f"rst_{name}"] = ResetSynchronizer(~locked, domain=name)
-            platform.add_clock_constraint(clk, CLOCKS[name][0] * 1e6)
+        # no constraint of ours on the PLL's outputs: nextpnr derives each from the
+        # oscillator's 25 MHz and the dividers (its log: "Derived frequency constraint")
 
         m.submodules.core = core = self.core
         # the UART (the FT231X's, the board's uart resource)
