@@ -109,6 +109,8 @@ class Link(wiring.Component):
         take = self.i.valid                         # the input is never stalled
         m.d.comb += self.i.ready.eq(1)
         m.d.sync += gap.eq(Mux(take, 0, Mux(gap == self.timeout, gap, gap + 1)))
+        drained = Signal()          # registered: the pipeline's busy is a wide OR, far away
+        m.d.sync += drained.eq(self.drained)
         quiet = gap == self.timeout
 
         crc_next = _crc_step(m, crc, byte)
@@ -238,11 +240,13 @@ class Link(wiring.Component):
                     m.d.sync += n["unknown"].eq(n["unknown"] + 1)
                     m.next = "READ"
             with m.State("CLEAR"):
-                with m.If(self.drained):
+                with m.If(drained):
                     m.d.comb += self.clear.eq(1)
-                    m.next = "CLEARED"
-            with m.State("CLEARED"):                 # the framebuffer is busy from here on
-                with m.If(self.drained):
+                    m.next = "CLEARING"
+            with m.State("CLEARING"):                # drained is a clock late: skip its
+                m.next = "CLEARED"                   # view of the clock before the pulse
+            with m.State("CLEARED"):
+                with m.If(drained):
                     reply(0)
             with m.State("DISCARD"):
                 with m.If(quiet):
@@ -263,7 +267,8 @@ class Link(wiring.Component):
                         m.next = "HUNT"
         # bytes that arrive while a frame is checked, applied or answered: not taken
         applying = Cat(*(fsm.ongoing(s) for s in ("CHECK", "READ", "TAKE", "JUDGE", "EMIT",
-                                                  "CLEAR", "CLEARED", "REPLY"))).any()
+                                                  "CLEAR", "CLEARING", "CLEARED",
+                                                  "REPLY"))).any()
         with m.If(take & applying):
             m.d.sync += n["dropped"].eq(n["dropped"] + 1)
         return m

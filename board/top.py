@@ -12,11 +12,12 @@ bits a clock on each edge pair: a 10-bit symbol every 5), pixel 25 MHz (CLKOS), 
 104.17 MHz (CLKOS2): the pipelines' placed Fmax is 118-127 MHz (docs/fpga.md), 12 % over.
 """
 from amaranth.hdl import Cat, ClockDomain, ClockSignal, Instance, Module, Mux, Signal
-from amaranth.lib import io, wiring
+from amaranth.lib import io, stream, wiring
 from amaranth.lib.cdc import ResetSynchronizer
 from amaranth.lib.fifo import AsyncFIFO
 from amaranth.lib.wiring import In, Out
 
+from hdl.unit import skid
 from scene.pipeline import ScenePipeline
 
 from .framebuffer import MAX_WORDS, Framebuffer, plane_width
@@ -79,15 +80,17 @@ class BoardCore(wiring.Component):
         m.d.comb += [link.i.valid.eq(self.rx_valid), link.i.payload.eq(self.rx_data),
                      self.tx_valid.eq(link.tx.valid), self.tx_data.eq(link.tx.payload),
                      link.tx.ready.eq(self.tx_ready)]
-        # link rows -> the pipeline's host port: the triangle's fields in their order
-        row, shift = link.o.payload, 0
-        for f in self.pipe.raster.unit.inputs:
-            m.d.comb += pipe.i.payload[f.name].eq(row.tri[shift:shift + f.fmt.width])
-            shift += f.fmt.width
-        m.d.comb += link.reject.eq(self._offscreen(pipe.i.payload))
-        m.d.comb += [pipe.i.payload.cmd.eq(row.cmd), pipe.i.payload.addr.eq(row.addr),
-                     pipe.i.payload.data.eq(row.data), pipe.i.valid.eq(link.o.valid),
-                     link.o.ready.eq(pipe.i.ready)]
+        # link rows -> a register slice -> the pipeline's host port (its ready is a wide OR
+        # of the stages' busy bits: the slice keeps it out of the link's state machine)
+        rows = stream.Signature(link.o.payload.shape()).create()
+        in_slice = skid(m, "link_slice", link.o, rows)
+        m.d.comb += link.reject.eq(self._offscreen(self._fields(link.o.payload.tri)))
+        fields = self._fields(rows.payload.tri)
+        m.d.comb += [pipe.i.payload[name].eq(v) for name, v in fields.items()]
+        m.d.comb += [pipe.i.payload.cmd.eq(rows.payload.cmd),
+                     pipe.i.payload.addr.eq(rows.payload.addr),
+                     pipe.i.payload.data.eq(rows.payload.data), pipe.i.valid.eq(rows.valid),
+                     rows.ready.eq(pipe.i.ready)]
         # fragments -> the depth test
         xb = pipe.o.payload.x.shape().width
         yb = pipe.o.payload.y.shape().width
@@ -96,7 +99,7 @@ class BoardCore(wiring.Component):
             m.d.comb += fb.i.payload[name].eq(pipe.o.payload[name])
         m.d.comb += [fb.i.valid.eq(pipe.o.valid), pipe.o.ready.eq(fb.i.ready),
                      fb.clear.eq(link.clear), fb.colour.eq(link.colour),
-                     link.drained.eq(~pipe.busy & ~fb.busy)]
+                     link.drained.eq(~pipe.busy & ~fb.busy & ~in_slice)]
         with m.If(fb.i.valid & fb.i.ready):
             m.d.sync += self.fragments.eq(self.fragments + 1)
         # scan-out, in the pixel domain
@@ -105,9 +108,18 @@ class BoardCore(wiring.Component):
                      self.symbols.eq(video.symbols), self.first.eq(video.first),
                      self.frames.eq(link.frames), self.outside.eq(fb.outside),
                      self.counters.eq(link.counters.as_value()),
-                     self.busy.eq(pipe.busy | fb.busy | link.o.valid)]
+                     self.busy.eq(pipe.busy | fb.busy | link.o.valid | in_slice)]
         return m
 
+
+    def _fields(self, flat):
+        """A triangle record's raster fields, in their order, from its flat bits."""
+        out, shift = {}, 0
+        for f in self.pipe.raster.unit.inputs:
+            out[f.name] = flat[shift:shift + f.fmt.width].as_signed() if f.fmt.signed \
+                else flat[shift:shift + f.fmt.width]
+            shift += f.fmt.width
+        return out
 
     def _offscreen(self, tri):
         """Every vertex beyond one edge of the image: no pixel centre of it is covered (a
