@@ -430,3 +430,34 @@ def test_board_cli_rejects_bad_arguments_in_one_line(tmp_path):
     assert r.returncode == 2 and r.stderr.strip().count("\n") == 0 and "--size" in r.stderr
     r = _board_cli("program", str(tmp_path / "missing.bit"))
     assert r.returncode == 2 and r.stderr.strip().count("\n") == 0
+
+
+def test_host_sends_again_on_a_rejection_or_silence():
+    """``python -m board send``'s host (board/send.py): a frame whose reply is a rejection or
+    does not come is sent again; one that never succeeds ends in one OSError."""
+    from board.send import RETRIES, Host
+
+    def reply(seq, result):
+        return bytes([0xC3, seq, ["ok", "crc", "cut", "long", "kind"].index(result)]) + \
+            bytes(REPLY_BYTES - 3)
+
+    class Port:                        # what pyserial's Serial does, scripted
+        def __init__(self, answers):
+            self.answers, self.sent = list(answers), []
+
+        def write(self, data):
+            self.sent.append(bytes(data))
+
+        def read(self, n):
+            return self.answers.pop(0) if self.answers else b""
+
+        def reset_input_buffer(self):
+            pass
+    data = frame("status", 5)
+    port = Port([reply(5, "crc"), b"", reply(4, "ok"), reply(5, "ok")])
+    assert Host(port).exchange(data, 5)["result"] == "ok"
+    assert port.sent == [data] * 4
+    port = Port([])
+    with pytest.raises(OSError, match="frame 5"):
+        Host(port).exchange(data, 5)
+    assert len(port.sent) == RETRIES + 1
