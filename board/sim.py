@@ -38,8 +38,8 @@ from .video import VGA, placement
 __all__ = ["Noise", "prepare", "build", "simulate", "decode_frame", "run"]
 
 HARNESS = Path(__file__).with_name("harness.cpp")
-# core : pixel clocks, as the PLL makes them (625/6 : 25 = 25 : 6)
-RATIO = (6, 25)
+# pixel : core clocks, as the PLL makes them (25 : 100)
+RATIO = (1, 4)
 
 
 class Noise(bytes):

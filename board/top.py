@@ -7,9 +7,10 @@
   to the TMDS clock through an ``AsyncFIFO``, and the serialisers (``ODDRX1F`` through
   ``lib.io.DDRBuffer``).
 
-Clocks (one ``EHXPLLL``, VCO 625 MHz from the 25 MHz oscillator): TMDS 125 MHz (CLKOP, 5
-bits a clock on each edge pair: a 10-bit symbol every 5), pixel 25 MHz (CLKOS), core
-104.17 MHz (CLKOS2): the pipelines' placed Fmax is 118-127 MHz (docs/fpga.md), 12 % over.
+Clocks (one ``EHXPLLL``, VCO 500 MHz from the 25 MHz oscillator): TMDS 125 MHz (CLKOP, two
+bits a clock through ``ODDRX1F``: a 10-bit symbol every 5), pixel 25 MHz (CLKOS), core 100 MHz
+(CLKOS2): the pipelines alone placed at 110.9-126 MHz (docs/fpga.md); on the board, beside the
+framebuffer and the link, their routes are longer (docs/board.md).
 """
 from amaranth.hdl import Cat, ClockDomain, ClockSignal, Instance, Module, Mux, Signal
 from amaranth.lib import io, stream, wiring
@@ -28,8 +29,9 @@ from .video import Video
 
 __all__ = ["BoardCore", "BoardTop", "CLOCKS", "BAUD", "check_size"]
 
-# MHz: (the PLL's output, its divider from the 625 MHz VCO)
-CLOCKS = {"tmds": (125.0, 5), "pixel": (25.0, 25), "sync": (625 / 6, 6)}
+# MHz: (the PLL's output, its divider from the 500 MHz VCO)
+VCO_MHZ = 500
+CLOCKS = {"tmds": (125.0, 4), "pixel": (25.0, 20), "sync": (100.0, 5)}
 BAUD = 3_000_000                     # the FT231X's fastest
 QUIET_S = 0.01
 
@@ -156,7 +158,7 @@ class BoardTop(wiring.Component):
             p_PLLRST_ENA="DISABLED", p_INTFB_WAKE="DISABLED", p_STDBY_ENABLE="DISABLED",
             p_DPHASE_SOURCE="DISABLED", p_OUTDIVIDER_MUXA="DIVA", p_OUTDIVIDER_MUXB="DIVB",
             p_OUTDIVIDER_MUXC="DIVC", p_OUTDIVIDER_MUXD="DIVD",
-            p_CLKI_DIV=1, p_CLKFB_DIV=5, p_FEEDBK_PATH="CLKOP",
+            p_CLKI_DIV=1, p_CLKFB_DIV=5, p_FEEDBK_PATH="CLKOP",    # 25 x 5 = CLKOP
             p_CLKOP_ENABLE="ENABLED", p_CLKOP_DIV=div["tmds"], p_CLKOP_CPHASE=div["tmds"] - 1,
             p_CLKOP_FPHASE=0,
             p_CLKOS_ENABLE="ENABLED", p_CLKOS_DIV=div["pixel"],
