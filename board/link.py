@@ -105,6 +105,7 @@ class Link(wiring.Component):
         rec, nb = Signal(8 * rec_bytes), Signal(range(rec_bytes + 1))
         part = Signal(range(rec_bytes))          # payload bytes past the last whole record
         rejected, unknown = Signal(), Signal()    # the record's verdicts (JUDGE)
+        got_byte = Signal(8)
         byte = self.i.payload
         take = self.i.valid                         # the input is never stalled
         m.d.comb += self.i.ready.eq(1)
@@ -218,8 +219,11 @@ class Link(wiring.Component):
                     m.d.comb += rd.addr.eq(ptr)
                     m.d.sync += ptr.eq(ptr + 1)
                     m.next = "TAKE"
-            with m.State("TAKE"):
-                m.d.sync += [rec.word_select(nb, 8).eq(rd.data), nb.eq(nb + 1)]
+            with m.State("TAKE"):                   # the block RAM's output, registered
+                m.d.sync += got_byte.eq(rd.data)     # (5.8 ns from its clock)
+                m.next = "PUT"
+            with m.State("PUT"):
+                m.d.sync += [rec.word_select(nb, 8).eq(got_byte), nb.eq(nb + 1)]
                 with m.If(nb + 1 == size):
                     m.next = "JUDGE"
                 with m.Else():
@@ -266,8 +270,8 @@ class Link(wiring.Component):
                         m.d.sync += self.frames.eq(self.frames + 1)
                         m.next = "HUNT"
         # bytes that arrive while a frame is checked, applied or answered: not taken
-        applying = Cat(*(fsm.ongoing(s) for s in ("CHECK", "READ", "TAKE", "JUDGE", "EMIT",
-                                                  "CLEAR", "CLEARING", "CLEARED",
+        applying = Cat(*(fsm.ongoing(s) for s in ("CHECK", "READ", "TAKE", "PUT", "JUDGE",
+                                                  "EMIT", "CLEAR", "CLEARING", "CLEARED",
                                                   "REPLY"))).any()
         with m.If(take & applying):
             m.d.sync += n["dropped"].eq(n["dropped"] + 1)
