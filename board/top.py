@@ -12,13 +12,12 @@ bits a clock through ``ODDRX1F``: a 10-bit symbol every 5), pixel 25 MHz (CLKOS)
 (CLKOS2): the pipelines alone placed at 110.9-126 MHz (docs/fpga.md); on the board, beside the
 framebuffer and the link, their routes are longer (docs/board.md).
 """
-from amaranth.hdl import Cat, ClockDomain, ClockSignal, Instance, Module, Mux, Signal
+from amaranth.hdl import Cat, ClockDomain, ClockSignal, Instance, Module, Mux, Signal, Value
 from amaranth.lib import io, stream, wiring
 from amaranth.lib.cdc import ResetSynchronizer
 from amaranth.lib.fifo import AsyncFIFO
 from amaranth.lib.wiring import In, Out
 
-from hdl.unit import skid
 from scene.pipeline import ScenePipeline
 
 from .framebuffer import MAX_WORDS, Framebuffer, plane_width
@@ -82,10 +81,11 @@ class BoardCore(wiring.Component):
         m.d.comb += [link.i.valid.eq(self.rx_valid), link.i.payload.eq(self.rx_data),
                      self.tx_valid.eq(link.tx.valid), self.tx_data.eq(link.tx.payload),
                      link.tx.ready.eq(self.tx_ready)]
-        # link rows -> a register slice -> the pipeline's host port (its ready is a wide OR
-        # of the stages' busy bits: the slice keeps it out of the link's state machine)
+        # link rows -> two slots -> the pipeline's host port (its ready is a wide OR of the
+        # stages' busy bits: the slots keep it out of the link's state machine and off the
+        # rows' registers)
         rows = stream.Signature(link.o.payload.shape()).create()
-        in_slice = skid(m, "link_slice", link.o, rows)
+        in_slice = two_slots(m, link.o, rows)
         m.d.comb += link.reject.eq(self._offscreen(self._fields(link.o.payload.tri)))
         fields = self._fields(rows.payload.tri)
         m.d.comb += [pipe.i.payload[name].eq(v) for name, v in fields.items()]
@@ -133,6 +133,30 @@ class BoardCore(wiring.Component):
         return (beyond(xs, lambda v: v < 0) | beyond(ys, lambda v: v < 0)
                 | beyond(xs, lambda v: v >= self.width * S)
                 | beyond(ys, lambda v: v >= self.height * S))
+
+
+def two_slots(m, src, dst):
+    """``src`` to ``dst`` through two registers written from the source side only: a slot
+    loads when the source offers an item and a slot is free (both registers), and the sink's
+    ready only moves a one-bit read pointer and the count. So a late ready (a pipeline's busy
+    OR) drives three flip-flops, not a register of every payload bit as a skid buffer's
+    enables do. One item a clock; returns busy (an item held)."""
+    width = len(Value.cast(src.payload))
+    slots = [Signal(width, name=f"slot{k}", reset_less=True) for k in (0, 1)]
+    wp, rp, count = Signal(), Signal(), Signal(range(3))
+    put = src.valid & src.ready
+    get = dst.valid & dst.ready
+    m.d.comb += [src.ready.eq(count != 2), dst.valid.eq(count != 0),
+                 dst.payload.eq(Mux(rp, slots[1], slots[0]))]
+    with m.If(put):
+        for k in (0, 1):
+            with m.If(wp == k):
+                m.d.sync += slots[k].eq(src.payload)
+        m.d.sync += wp.eq(~wp)
+    with m.If(get):
+        m.d.sync += rp.eq(~rp)
+    m.d.sync += count.eq(count + put - get)
+    return count != 0
 
 
 class BoardTop(wiring.Component):
