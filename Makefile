@@ -65,7 +65,7 @@ sim: setup
 
 # Hardware counts of every unit from Yosys (multipliers, adders, tables), beside the seeds'.
 report: setup
-	$(PY) -m sim.report
+	$(PY) -m flows.report
 
 # Place and route of every unit and the default scene's pipeline in a serial wrapper, on
 # ECP5-25F -6 and iCE40 UP5K, 5 seeds: Fmax (median, min-max), utilisation, critical path.
@@ -73,7 +73,7 @@ report: setup
 # make fpga [UNIT=a,b] [SEEDS=n] [RASTER=row_serial=2,setup_serial=1] (a scene pipeline's raster knobs)
 SEEDS   ?= 5
 fpga: setup
-	$(PY) -m sim.fpga --seeds $(SEEDS) $(if $(UNIT),--units $(UNIT))$(if $(RASTER), --raster $(RASTER))
+	$(PY) -m flows.fpga --seeds $(SEEDS) $(if $(UNIT),--units $(UNIT))$(if $(RASTER), --raster $(RASTER))
 
 # The stream contract proven by SymbiYosys (yowasp-sby, yices): every unit and a pipeline per
 # method and bump method: the one-row units by k-induction, the raster and the pipelines by
@@ -82,7 +82,7 @@ fpga: setup
 ONLY    ?=
 TIMEOUT ?=
 formal: setup
-	$(PY) -m sim.formal $(if $(ONLY),--only $(ONLY)) $(if $(TIMEOUT),--timeout $(TIMEOUT))
+	$(PY) -m flows.formal $(if $(ONLY),--only $(ONLY)) $(if $(TIMEOUT),--timeout $(TIMEOUT))
 
 # Generated inputs (hypothesis): 10,000 scene files, malformed and valid-but-hard, each a clear
 # error naming its key or a picture; 300 valid ones through the RTL against the model; 10,000
@@ -91,7 +91,7 @@ formal: setup
 N       ?= 10000
 RTL     ?= 300
 fuzz: setup
-	$(PY) -W ignore::RuntimeWarning -m sim.fuzz --scenes $(N) --npz $(N) --rtl $(RTL)
+	$(PY) -W ignore::RuntimeWarning -m flows.fuzz --scenes $(N) --npz $(N) --rtl $(RTL)
 
 # What accuracy costs: every knob's settings measured side by side (image error with FLIP,
 # unit error, latency, Fmax, ns per pixel, area, simulation time), the seeds' claims, Pareto
@@ -100,7 +100,7 @@ fuzz: setup
 QUICK   ?=
 DASK    ?=
 tradeoffs: setup
-	$(PY) -m sim.tradeoffs $(if $(QUICK),--quick) $(if $(DASK),--dask $(DASK)) \
+	$(PY) -m flows.tradeoffs $(if $(QUICK),--quick) $(if $(DASK),--dask $(DASK)) \
 		$(if $(filter command line,$(origin SEEDS)),--seeds $(SEEDS))
 
 # A scene in motion, every frame through the RTL on the batch path (the scene's [turntable]
@@ -115,25 +115,25 @@ turntable: setup
 # The texel cache on the bump scenes: hit rate, fragments per clock, memory words per fragment
 # at 256 and 1024 px, memory latency 12 and 40, three caches: build/texcache/texcache.md.
 texcache: setup
-	$(PY) -m sim.texcache $(if $(QUICK),--quick)
+	$(PY) -m flows.texcache $(if $(QUICK),--quick)
 
 # Method errors (Fenney units, seed 003's rotation) with plots in build/accuracy/.
 accuracy: setup
 	$(PY) -m golden.accuracy
-	$(PY) -m sim.losses
+	$(PY) -m flows.losses
 
 # The setup's reciprocal: Newton-Raphson steps or the divider, clocks against accuracy.
 recip-cost: setup
-	$(PY) -m sim.recip_cost
+	$(PY) -m flows.recip_cost
 
 # Simulation speed side by side: every unit on every simulator (build/bench/).
 bench: setup
-	$(PY) -m sim.bench
+	$(PY) -m flows.bench
 
 # Long streams with random stalls on the batch path against golden: 10 million rows per unit,
 # 100,000 triangles through raster.
 soak: setup
-	$(PY) -m sim.soak
+	$(PY) -m flows.soak
 	$(PY) -m pytest -m long -n $(JOBS) --dist loadgroup
 
 clean:

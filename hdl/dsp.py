@@ -20,7 +20,7 @@ __all__ = ["Target", "ecp5", "mult18", "soft_mult", "soft_halves", "soft_as_mul"
 
 
 class Target:
-    """The platform of the FPGA flow (``sim.fpga``): only the family is known."""
+    """The platform of the FPGA flow (``flows.fpga``): only the family is known."""
 
     def __init__(self, family):
         self.family = family
@@ -72,7 +72,7 @@ _SOFT_AS_MUL = ContextVar("soft_as_mul", default=False)
 def soft_as_mul():
     """Within it, :func:`soft_mult` is written as ``a * b`` (the same function: tests/test_fpga.py
     checks the adders against it exhaustively), so that the formal flow's product stand-in
-    (``sim.formal.MUL_STANDIN``) replaces it too, instead of the solver reasoning through the
+    (``flows.formal.MUL_STANDIN``) replaces it too, instead of the solver reasoning through the
     adder tree (fenney_polar's ``order`` proof: docs/formal.md)."""
     token = _SOFT_AS_MUL.set(True)
     try:

@@ -616,7 +616,7 @@ def ideal(prep, formats=()):
 
     ``formats``: groups of stages run as their models instead, with the RTL's formats (raster,
     texels, shading, power, colour: ``FORMAT_GROUPS``), so each group's own loss can be
-    measured (``sim.losses``); all of them give the model's image."""
+    measured (``flows.losses``); all of them give the model's image."""
     stages = prep["pipeline"].stages
     modes = ["model" if FORMAT_GROUPS.get(s.name, "power") in formats else "ideal"
              for s in stages]

@@ -94,7 +94,7 @@ def cmd_verilog(args):
     target = args.target
     if args.scene:
         from scene.driver import load, pipeline_params, prepare
-        from .fpga import board_form
+        from scene.stages.texture import board_form
         scene = load(args.scene)
         module = f"scene_{scene['name']}"
         if not module.isidentifier():

@@ -134,7 +134,7 @@ RASTER_KNOBS = ("setup_ii", "setup_mults", "setup_narrow", "row_mults", "row_ser
 
 def raster_knobs(text):
     """``--raster setup_ii=16,setup_mults=2``: the raster's build knobs (docs/quadratic.md),
-    each checked by the pipeline's own ranges (``sim render``, ``sim.fpga``)."""
+    each checked by the pipeline's own ranges (``sim render``, ``flows.fpga``)."""
     out = {}
     for item in filter(None, (text or "").split(",")):
         key, sep, value = (x.strip() for x in item.partition("="))

@@ -303,8 +303,8 @@ def test_render_raster_knobs_are_checked(arg, message, tmp_path):
     (["--units", "raster", "--raster", "row_serial=2"], "the knobs are the scene pipelines'"),
     (["--units", "scene", "--raster", "row_serial=x"], "row_serial must be a whole number")])
 def test_fpga_raster_knobs_are_checked(args, message):
-    """``python -m sim.fpga --raster`` (``make fpga RASTER=``): checked before any synthesis,
+    """``python -m flows.fpga --raster`` (``make fpga RASTER=``): checked before any synthesis,
     one line naming the knob, exit 2."""
-    r = cli("sim.fpga", *args)
+    r = cli("flows.fpga", *args)
     assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
     assert message in r.stderr, r.stderr

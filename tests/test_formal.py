@@ -6,8 +6,8 @@ import shutil
 
 import pytest
 
-import sim.formal
-from sim.formal import CONTROL, MUTANT_TARGETS, MUTANTS, ORDER, caught, run, tools_env
+import flows.formal
+from flows.formal import CONTROL, MUTANT_TARGETS, MUTANTS, ORDER, caught, run, tools_env
 
 UNIT = "texel_decode"
 pytestmark = pytest.mark.skipif(shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None,
@@ -37,7 +37,7 @@ def test_the_products_stand_in_leaves_products_by_constants(tmp_path):
     it past the tables' last entry, onto uninitialised words that each copy read differently
     (illum's false order failure, docs/formal.md). Checked on Yosys's own view: after the
     techmap, the constant product is still a $mul and the data product is gone."""
-    from sim.formal import MUL_STANDIN
+    from flows.formal import MUL_STANDIN
     cells = _cells_after(tmp_path, MUL_STANDIN, "prep -top top; techmap -map standin.v t:$mul",
                          "module top(input [7:0] a, b, output [15:0] y, z);\n"
                          "  assign y = a * b;\n  assign z = a * 8'd3;\nendmodule\n")
@@ -62,8 +62,8 @@ def test_the_invariant_fails_when_a_stage_is_left_out(monkeypatch):
     """inv_shadow says the unit's stage valid bits are the shadow's, stage by stage. The list
     comes from the exported Verilog's names; one bit left out must fail, in the base case (a
     real trace), so a wrong list can never make the proof pass."""
-    real = sim.formal.stage_valids
-    monkeypatch.setattr(sim.formal, "stage_valids", lambda v, m: real(v, m)[1:])
+    real = flows.formal.stage_valids
+    monkeypatch.setattr(flows.formal, "stage_valids", lambda v, m: real(v, m)[1:])
     r = run(UNIT, UNIT, {}, "prove", only=CONTROL)
     assert r["status"] == "fail" and any(f.startswith("inv_shadow") for f in r["failed"]), r
 
@@ -73,8 +73,8 @@ def test_the_data_invariant_fails_on_a_wrong_stage(monkeypatch):
     swapped it must not be proven (the induction step finds the state where they differ), so
     the invariant that makes order inductive is checked like any other assertion, not
     assumed."""
-    real = sim.formal.stage_regs
-    monkeypatch.setattr(sim.formal, "stage_regs",
+    real = flows.formal.stage_regs
+    monkeypatch.setattr(flows.formal, "stage_regs",
                         lambda v, m: [(k % 2 + 1, p, w) for k, p, w in real(v, m)])
     r = run(UNIT, UNIT, {}, "prove", only=ORDER)
     assert r["status"] != "pass" and any(f.startswith("inv_data") for f in r["failed"]), r
@@ -83,7 +83,7 @@ def test_the_data_invariant_fails_on_a_wrong_stage(monkeypatch):
 def test_the_tables_stand_in_replaces_roms_only(tmp_path):
     """ROM_STANDIN makes a table's word its address (one-row units' order proof, where the
     cosine tables as logic stopped the solver). A memory with a write port is left as it is."""
-    from sim.formal import ROM_STANDIN
+    from flows.formal import ROM_STANDIN
     cells = _cells_after(
         tmp_path, ROM_STANDIN, "hierarchy -top top; proc; memory_collect; "
         "techmap -map standin.v t:$mem_v2",

@@ -14,7 +14,7 @@ from amaranth.sim import Simulator
 from golden.fenney import texel_decode
 from hdl.dsp import Target, mult18, soft_as_mul, soft_halves, soft_mult
 from hdl.units import make_unit
-from sim.fpga import SerialWrapper, markdown, run
+from flows.fpga import SerialWrapper, markdown, run
 from sim.simulators import available
 
 

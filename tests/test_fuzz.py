@@ -6,7 +6,7 @@ import warnings
 
 import pytest
 
-from sim.fuzz import fuzz_npz, fuzz_scenes
+from flows.fuzz import fuzz_npz, fuzz_scenes
 from sim.simulators import available
 
 
@@ -62,7 +62,7 @@ def test_vertex_at_the_coordinate_fields_edge():
     field; the driver now culls such triangles (prepare checks every field), so the RTL covers
     exactly the model's pixels."""
     from scene import driver as S
-    from sim.fuzz import rtl_check
+    from flows.fuzz import rtl_check
     prep = S.prepare(S.load("tests/data/fuzz_coordinate_edge.toml"))
     assert rtl_check(prep) is None
 
@@ -76,7 +76,7 @@ def test_phong_fenney_two_lights_within_its_derived_bound():
     those X steps allow (``scene.driver.fenney_candidates``), though not always of the
     model's own: the bound this combination really has."""
     from pathlib import Path
-    from sim.fuzz import rtl_check
+    from flows.fuzz import rtl_check
     from scene import driver as S
     prep = S.prepare(S.load(Path(__file__).with_name("data") / "phong_fenney_two_lights.toml"))
     assert rtl_check(prep) is None

@@ -1,6 +1,7 @@
 """The packages' layers: hdl (the units) below golden (their models) below scene (the
-driver, the stages, the composed top) below sim (the simulators, the reports, the CLI)
-below board (the ULX3S: its top, its whole-frame simulation, its bitstream).
+driver, the stages, the composed top) below sim (the simulators, their runners, the CLI)
+below flows (place and route, proofs, sweeps, fuzzing, benchmarks, reports) below board
+(the ULX3S: its top, its whole-frame simulation, its bitstream).
 Every import in the tree, at the top of a module or inside a function, is read from the
 source; a package imports nothing from a layer above it, and no modules import each other
 in a circle."""
@@ -8,7 +9,7 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-LAYERS = ["hdl", "golden", "scene", "sim", "board"]
+LAYERS = ["hdl", "golden", "scene", "sim", "flows", "board"]
 # golden's command line (python -m golden run) reads and writes npz files with sim's helpers
 ALLOWED_UP = {("golden.__main__", "sim")}
 

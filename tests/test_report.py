@@ -1,5 +1,5 @@
 """Hardware counts from Yosys against the seeds' own counts."""
-from sim.report import count
+from flows.report import count
 
 
 def test_power_unit_is_the_patents_three_multiplies_and_five_add_subtracts(tmp_path):

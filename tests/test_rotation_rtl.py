@@ -6,7 +6,7 @@ from hypothesis import given, settings, strategies as st
 
 from golden import angular
 from hdl.rotation_unit.rotation import recip_sin_lut
-from sim.report import count
+from flows.report import count
 
 from sim.simulators import available
 

@@ -313,10 +313,10 @@ def test_ideal_splits_the_error(scene):
 @pytest.mark.parametrize("scene", ["default", "phong", "bump_polar", "bump_xz_renorm",
                                    "bump_angular_exact"])
 def test_every_group_of_formats_gives_the_model(scene):
-    """sim.losses runs the ideal with groups of stages as their models: with every group the
+    """flows.losses runs the ideal with groups of stages as their models: with every group the
     image is the model's, pixel for pixel (the conversions between the ideal's reals and the
     models' codes lose nothing), so each group's loss is a share of the model's."""
-    from sim.losses import GROUPS
+    from flows.losses import GROUPS
     prep = S.prepare(S.load(f"{SCENES}/{scene}.toml"))
     img, cov, _ = S.model(prep)
     mixed, mcov = S.ideal(prep, GROUPS)

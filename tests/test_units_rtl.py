@@ -121,7 +121,7 @@ def test_short_soak_on_the_batch_path():
     """make soak's short version: a million rows through fenney_power on the batch path with
     valid gaps and ready stalls, bit-exact against the patent's formula; the harness itself
     fails if a stalled output changes. (make soak: 10 million rows per unit.)"""
-    from sim.soak import soak_rows
+    from flows.soak import soak_rows
     ok, text = soak_rows("fenney_power", 1_000_000)
     assert ok, text
     assert text.startswith("1,000,000 rows in, 1,000,000 out")

@@ -31,6 +31,22 @@ MEMORIES = ("external", "onchip")
 ONCHIP_MAX = 128              # texels a side of the on-chip texture RAM (the ECP5-25F's fit)
 ONCHIP_LATENCY = 1            # the RAM's read register
 
+# The on-chip texture's side where the 128 x 128 of ONCHIP_MAX cannot fit beside the rest:
+# angular's rotation and illumination tables take 52 of the 56 DP16KD, and 32 x 32 texels of
+# 24 bits take 2 more (128 x 128 would take 24).
+BOARD_TEXTURE = {"angular": 32}
+
+
+def board_form(params, texture="onchip"):
+    """A scene pipeline's parameters as a board builds it: a bump pipeline's texture in the
+    on-chip RAM (``texture = "onchip"``, the default for FPGA builds), at most
+    ``ONCHIP_MAX`` texels a side, loaded at run time like the rest of the scene's data; or
+    ``external``, the memory port, as the renders take it."""
+    if params.get("bump", "none") == "none" or texture == "external":
+        return dict(params)
+    return {**params, "texture": "onchip",
+            "bump_size": min(params["bump_size"], BOARD_TEXTURE.get(params["bump"], ONCHIP_MAX))}
+
 
 CACHE = ("cache_lines", "cache_line", "cache_ways", "tex_queue", "bank_ports")
 

@@ -9,7 +9,7 @@ shading (phong, fenney_dot, fenney_polar, bump_polar: their tables and widths), 
 colour (its 12-bit coefficients). Each loss is in dB against the ideal; all of them together
 give the model exactly, which the RTL matches within its bounds (the gallery table).
 
-    python -m sim.losses [SCENE ...]       # default: every scene in scenes/
+    python -m flows.losses [SCENE ...]       # default: every scene in scenes/
 
 Writes ``build/accuracy/losses.{md,json}``.
 """
@@ -21,9 +21,9 @@ import numpy as np
 
 from scene import driver as S
 
-from .cli_common import user_errors
-from .render import compare
-from .verilog import BUILD, SCENES
+from sim.cli_common import user_errors
+from sim.render import compare
+from sim.verilog import BUILD, SCENES
 
 GROUPS = ("raster", "texels", "shading", "power", "colour")
 SUB_BITS = (6, 8, 10)          # the vertex positions' fraction bits tried beyond the RTL's 4
@@ -88,7 +88,7 @@ def table(rows):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.losses", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m flows.losses", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="*", help="scene files (default: every scene in scenes/)")
     ap.add_argument("--out", default=str(BUILD / "accuracy"))

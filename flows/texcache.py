@@ -11,9 +11,9 @@ import argparse
 import json
 import sys
 
-from .cli_common import user_errors
-from .render import render
-from .verilog import BUILD, SCENES
+from sim.cli_common import user_errors
+from sim.render import render
+from sim.verilog import BUILD, SCENES
 
 OUT = BUILD / "texcache"
 SCENE_NAMES = ("bump_polar", "bump_angular", "bump_xz")
@@ -52,7 +52,7 @@ def markdown(rows):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.texcache", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m flows.texcache", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="the default cache, latency 12")
     args = ap.parse_args(argv)

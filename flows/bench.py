@@ -11,7 +11,7 @@ a million fragments either way) so that its run is long enough to time (its proc
 is included). Build times are those recorded when each
 model was built (models are cached under ``build/``).
 
-    make bench      (python -m sim.bench [--units U,U] [--batch-rows N])
+    make bench      (python -m flows.bench [--units U,U] [--batch-rows N])
 """
 import argparse
 import json
@@ -23,10 +23,10 @@ import numpy as np
 from golden import MODELS
 from hdl.units import UNITS, make_unit
 
-from .run import simulate
-from .cli_common import unit_names, user_errors
-from .simulators import SIMS, available
-from .verilog import BUILD, SCENES
+from sim.run import simulate
+from sim.cli_common import unit_names, user_errors
+from sim.simulators import SIMS, available
+from sim.verilog import BUILD, SCENES
 
 OUT = BUILD / "bench"
 ROWS = {"amaranth": 5000, "icarus": 20000, "cocotb-verilator": 20000, "verilator": 20000}
@@ -42,10 +42,10 @@ def build_seconds(name, params, simulator):
     if simulator == "amaranth":
         return None
     if simulator == "verilator":
-        from .batch import build
+        from sim.batch import build
         path = build(name, params).parent / "build_seconds"
     else:
-        from .cocotb_run import build
+        from sim.cocotb_run import build
         path = build(name, params, simulator)[1] / "build_seconds"
     return float(path.read_text()) if path.exists() else None
 
@@ -64,7 +64,7 @@ def measure(name, params, simulator, inputs, label=None):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.bench", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m flows.bench", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--units", help="comma-separated units, 'scene' for the default scene's "
                                     "pipeline (default: all of them)")

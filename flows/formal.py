@@ -26,7 +26,7 @@ Each design gets a BMC of every property to latency + ``SLACK``, a k-induction p
 Products are replaced where that is sound (``MUL_STANDIN``, ``sby_text``); docs/formal.md
 says why, and what the solver did not reach.
 
-``python -m sim.formal [--only a,b] [--quick] [--jobs n] [--timeout s]`` writes
+``python -m flows.formal [--only a,b] [--quick] [--jobs n] [--timeout s]`` writes
 build/formal/formal.{json,md}; ``--report`` rebuilds the table from every check's result.
 """
 import argparse
@@ -43,7 +43,7 @@ from hdl.dsp import soft_as_mul
 from hdl.span_unit.span import ROW_QUEUE
 from hdl.units import UNITS, make_unit
 
-from .verilog import BUILD, export
+from sim.verilog import BUILD, export
 
 OUT = BUILD / "formal"
 BOX = 2              # triangles within this many pixels of their first vertex (the drain bound)
@@ -717,8 +717,8 @@ def caught(r):
 
 
 def main(argv=None):
-    from .jobs import run as run_jobs
-    ap = argparse.ArgumentParser(prog="python -m sim.formal", description=__doc__.split("\n")[0])
+    from sim.jobs import run as run_jobs
+    ap = argparse.ArgumentParser(prog="python -m flows.formal", description=__doc__.split("\n")[0])
     ap.add_argument("--only", help="comma-separated targets (default: all): "
                     + ", ".join(targets()))
     ap.add_argument("--jobs", type=int, default=2, help="checks at once (default 2)")

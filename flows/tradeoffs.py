@@ -8,7 +8,7 @@ in one task:
   knob's unit, its golden vectors through the RTL, against its *exact* function (not its
   model): maximum, 99th percentile and mean, in the unit the row names;
 - **time:** the design's latency, fragments per clock on the scene, Fmax on ECP5-25F -6
-  (``sim.fpga``'s flow, median over ``--seeds``), and ns per pixel = cycles per fragment /
+  (``flows.fpga``'s flow, median over ``--seeds``), and ns per pixel = cycles per fragment /
   Fmax;
 - **area:** LUT4, FF, MULT18X18D, DP16KD placed on the ECP5-25F (synthesis counts where it does
   not fit), and whether it fits an iCE40 UP5K (placed there too);
@@ -25,7 +25,7 @@ The sweep runs through an executor: a local process pool with a progress bar, or
 ``--dask ADDRESS`` a Dask distributed cluster, one task per configuration.
 
     make tradeoffs [QUICK=1] [DASK=tcp://host:8786]
-    python -m sim.tradeoffs [--quick] [--dask ADDRESS] [--seeds N] [-j N] [--knobs a,b]
+    python -m flows.tradeoffs [--quick] [--dask ADDRESS] [--seeds N] [-j N] [--knobs a,b]
 
 Writes ``build/tradeoffs/tradeoffs.json``, ``report.md`` and the Pareto plots.
 """
@@ -41,9 +41,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .cli_common import UsageError, user_errors
-from .jobs import run
-from .verilog import BUILD, SCENES
+from sim.cli_common import UsageError, user_errors
+from sim.jobs import run
+from sim.verilog import BUILD, SCENES
 
 OUT = BUILD / "tradeoffs"
 FLOW = "tradeoffs-2"          # bump when a measurement changes: the row cache's key has it
@@ -258,7 +258,7 @@ def _area(design, seeds):
 
 
 def _image(cfg, simulator, key):
-    from .render import render
+    from sim.render import render
     size = (cfg["size"], cfg["size"]) if cfg["size"] else None
     params = _scene_params(cfg["scene"], cfg["hardware"], cfg["size"])
     with _lock("build", "scene", params):
@@ -313,16 +313,16 @@ def _exact_error(name, params, inputs, out):
 
 def _build(name, params, simulator):
     if simulator == "verilator":
-        from .batch import build
+        from sim.batch import build
         build(name, params)
     elif simulator != "amaranth":
-        from .cocotb_run import build
+        from sim.cocotb_run import build
         build(name, params, simulator)
 
 
 def _unit_error(unit, simulator):
     from golden import MODELS, TYPICAL_SIZE, random_triangles
-    from .run import simulate
+    from sim.run import simulate
     name, params, n = unit["name"], unit["params"], unit["rows"]
     rng = np.random.default_rng(11)
     if name == "raster":
@@ -635,7 +635,7 @@ def write(rows, out, opts, wall):
     figs = plots(rows, out)
     md = ["# What accuracy costs", "",
           f"{len(rows)} configurations, one knob at a time (the default in bold), measured by "
-          f"`python -m sim.tradeoffs` in {wall:.0f} s ({opts['seeds']} place-and-route seed(s), "
+          f"`python -m flows.tradeoffs` in {wall:.0f} s ({opts['seeds']} place-and-route seed(s), "
           f"renders on {opts['simulator']}). Image error: the RTL's render against the "
           "float64 reference (per-pixel Phong, exact power; exact bump shading), PSNR, "
           "maximum (8-bit levels) and mean FLIP over covered pixels; beside it the method's "
@@ -656,7 +656,7 @@ def write(rows, out, opts, wall):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.tradeoffs", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m flows.tradeoffs", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="a reduced sweep (no raster), minutes")
     ap.add_argument("--knobs", help="comma-separated knobs (default: all)")

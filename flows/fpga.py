@@ -15,7 +15,7 @@ critical path, and "does not fit" with the resource that ran out. Results are ca
 ``build/fpga/cache/`` by a hash of the Verilog, the device and the flow, so an unchanged design
 is not placed again. Writes ``build/fpga/fpga.json`` and ``build/fpga/fpga.md``.
 
-    make fpga    (python -m sim.fpga [--units U,U] [--devices ecp5,ice40] [--seeds N] [-j N])
+    make fpga    (python -m flows.fpga [--units U,U] [--devices ecp5,ice40] [--seeds N] [-j N])
 
 iCE40 timing: this nextpnr times every SB_MAC16 port as registered, so a multiplier without
 registers at its inputs and its output has its combinational path split and never timed end to
@@ -41,8 +41,8 @@ from amaranth.lib.wiring import In, Out
 from hdl.dsp import Target
 from hdl.units import UNITS, make_unit
 
-from .cli_common import UsageError, raster_knobs, unit_names, user_errors
-from .verilog import BUILD, SCENES
+from sim.cli_common import UsageError, raster_knobs, unit_names, user_errors
+from sim.verilog import BUILD, SCENES
 
 OUT = BUILD / "fpga"
 FLOW = "fpga-flow-1"          # bump when the scripts below change: the cache key includes it
@@ -122,29 +122,12 @@ class SerialWrapper(wiring.Component):
         return m
 
 
-def board_form(params, texture="onchip"):
-    """A scene pipeline's parameters as a board builds it: a bump pipeline's texture in the
-    on-chip RAM (``texture = "onchip"``, the default for FPGA builds), at most
-    ``ONCHIP_MAX`` texels a side, loaded at run time like the rest of the scene's data; or
-    ``external``, the memory port, as the renders take it."""
-    from scene.stages.texture import ONCHIP_MAX
-    if params.get("bump", "none") == "none" or texture == "external":
-        return dict(params)
-    return {**params, "texture": "onchip",
-            "bump_size": min(params["bump_size"], BOARD_TEXTURE.get(params["bump"], ONCHIP_MAX))}
-
-
-# The on-chip texture's side where the 128 x 128 of ONCHIP_MAX cannot fit beside the rest:
-# angular's rotation and illumination tables take 52 of the 56 DP16KD, and 32 x 32 texels of
-# 24 bits take 2 more (128 x 128 would take 24).
-BOARD_TEXTURE = {"angular": 32}
-
-
 def designs(names, texture="onchip", raster=None):
     """``[(label, unit name, params)]``: the units, then the scenes' pipelines ("scene": the
     default scene's; "scene_<name>": ``scenes/<name>.toml``'s), in their board form, built
     with the raster knobs ``raster`` (``sim render --raster``'s; the label names them)."""
     from scene.driver import load, pipeline_params
+    from scene.stages.texture import board_form
     out = [(n, n, {}) for n in names if n in UNITS]
     tag = "".join(f"-{k}{v}" for k, v in (raster or {}).items())
     for n in names:
@@ -366,7 +349,7 @@ def run(names, devices, seeds, jobs, quiet=False, cache=OUT / "cache", texture="
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.fpga", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m flows.fpga", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--units", help="comma-separated units, 'scene' for the default scene's "
                                     "pipeline, 'scene_<name>' for scenes/<name>.toml's "

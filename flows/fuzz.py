@@ -25,7 +25,7 @@ process, through their ``main``) on malformed files: wrong types, shapes, length
 extra fields, out-of-range values, nan, random bytes, truncated and empty files, a bare .npy.
 Each must exit 2 with one line.
 
-``python -m sim.fuzz [--scenes N] [--npz N] [--rtl N] [--seed S]``: writes
+``python -m flows.fuzz [--scenes N] [--npz N] [--rtl N] [--seed S]``: writes
 build/fuzz/fuzz.{json,md} and each failure's input under build/fuzz/failures/.
 """
 import argparse
@@ -47,7 +47,7 @@ from hypothesis import HealthCheck, given, seed as hseed, settings, strategies a
 from scene import driver as S
 from scene.pipeline import BUMPS, METHODS
 
-from .verilog import BUILD
+from sim.verilog import BUILD
 
 OUT = BUILD / "fuzz"
 CLEAR = None        # the exception types ``sim.cli_common.user_errors`` reports in one line
@@ -73,7 +73,7 @@ def _clear_errors():
     if CLEAR is None:
         from hdl.fixed import FieldError
         from hdl.units import ParamError
-        from .cli_common import UsageError
+        from sim.cli_common import UsageError
         CLEAR = (S.SceneError, UsageError, FieldError, ParamError)
     return CLEAR
 
@@ -314,10 +314,10 @@ def try_scene(text, tmp, name="fuzz"):
 
 def rtl_check(prep):
     """A valid scene through the RTL on the batch path: ``None`` or what was wrong."""
-    from .batch import BatchError
-    from .run import simulate
-    from .stream import StreamError
-    from .stream import Memory
+    from sim.batch import BatchError
+    from sim.run import simulate
+    from sim.stream import StreamError
+    from sim.stream import Memory
     memory = None if prep["memory"] is None else Memory(prep["memory"], latency=12)
     try:
         out, _ = simulate("scene", prep["params"], S.rtl_inputs(prep), "verilator",
@@ -510,7 +510,7 @@ def fuzz_npz(n, seed, tmp, log=None):
     from golden.__main__ import main as golden_main
     from hdl.units import UNITS, make_unit
     from sim.__main__ import main as sim_main
-    from .cli_common import write_outputs
+    from sim.cli_common import write_outputs
     rng = np.random.default_rng(seed)
     tmp.mkdir(parents=True, exist_ok=True)
     counts, failures = Counter(), []
@@ -571,7 +571,7 @@ def report(scene_counts, npz_counts, failures, seconds):
 
 def main(argv=None):
     from tqdm import tqdm
-    ap = argparse.ArgumentParser(prog="python -m sim.fuzz", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m flows.fuzz", description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", type=int, default=10000)
     ap.add_argument("--npz", type=int, default=10000)
     ap.add_argument("--rtl", type=int, default=300, help="valid scenes through the RTL")
@@ -583,7 +583,7 @@ def main(argv=None):
     bar = tqdm(total=args.scenes + args.rtl + args.npz, desc="fuzz", unit="case",
                file=sys.stderr)
     if args.rtl:
-        from .batch import build
+        from sim.batch import build
         for config in RTL_CONFIGS:          # the models first, each once
             build("scene", _config_params(config))
     sc, sf = fuzz_scenes(args.scenes, args.seed, tmp, args.rtl, log=lambda: bar.update(1))

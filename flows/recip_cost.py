@@ -4,7 +4,7 @@ clocks per triangle (its schedule's length), the largest relative error of 1/Ome
 (the same integer recurrences as the RTL, hdl/setup_unit/setup.py), and the largest fragment error the
 RTL shows against the float model on the same triangles.
 
-    make recip-cost   (python -m sim.recip_cost [--triangles N] [--screen-bits B] [--simulator S])
+    make recip-cost   (python -m flows.recip_cost [--triangles N] [--screen-bits B] [--simulator S])
 """
 import argparse
 import time
@@ -15,9 +15,9 @@ from golden import MODELS, TYPICAL_SIZE, random_triangles, raster_hard_cases
 from hdl.arith import recip_seed
 from hdl.units import make_unit
 
-from .run import simulate
-from .cli_common import user_errors
-from .simulators import SIMS
+from sim.run import simulate
+from sim.cli_common import user_errors
+from sim.simulators import SIMS
 
 CONFIGS = [("newton", 0), ("newton", 1), ("newton", 2), ("newton", 3), ("divide", 0)]
 
@@ -39,7 +39,7 @@ def recip_error(method, iters, R=28, bits=16):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.recip_cost", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m flows.recip_cost", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--triangles", type=int, default=200,
                     help="random triangles of typical size after the hard cases (default 200)")

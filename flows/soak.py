@@ -5,7 +5,7 @@ triangles of typical size. Bit-exact units must match exactly, the others stay w
 derived bounds; the row count and the row-by-row comparison show that nothing was lost,
 repeated or reordered, and the harness checks that every stalled output held its payload.
 
-    make soak      (python -m sim.soak [--rows N] [--triangles N] [--units U,U])
+    make soak      (python -m flows.soak [--rows N] [--triangles N] [--units U,U])
 """
 import argparse
 import sys
@@ -16,8 +16,8 @@ import numpy as np
 from golden import MODELS
 from hdl.units import UNITS, make_unit
 
-from .run import simulate
-from .cli_common import unit_names, user_errors
+from sim.run import simulate
+from sim.cli_common import unit_names, user_errors
 
 CHUNK = 1_000_000            # rows checked against golden at a time (memory)
 TRAFFIC = {"p_valid": 0.8, "p_ready": 0.7, "seed": 17}
@@ -78,7 +78,7 @@ def soak_raster(triangles, seed=0, chunk=5000):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m sim.soak", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m flows.soak", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rows", type=int, default=10_000_000)
     ap.add_argument("--triangles", type=int, default=100_000)
