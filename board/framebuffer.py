@@ -1,7 +1,7 @@
 """The depth-tested framebuffer: the pipeline's last stage on the board.
 
 Each fragment (x, y, depth, r, g, b) is tested against the depth plane and, where it is
-nearer (a larger depth, scene/driver.py's convention), written to the colour plane: one
+nearer (a larger depth, scene/prepare.py's convention), written to the colour plane: one
 fragment a clock. Planes, ``width2 x height`` words (``width2`` the image's width rounded
 up to a power of two, so an address is ``y`` beside ``x``, with no multiplier):
 

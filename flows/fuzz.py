@@ -17,7 +17,7 @@ malformed scene, naming the key) or a picture. Anything else is a traceback: a b
 scenes of a few pipeline configurations (``RTL_CONFIGS``, so the simulator models stay
 cached) also go through the RTL on the batch path: the same pixels as the model, each within
 one level (tests/test_scenes.py's bound; phong with Fenney's power and fenney_polar: each
-fragment within its candidates, ``scene.driver.fenney_candidates`` and ``polar_candidates``),
+fragment within its candidates, ``scene.models.fenney_candidates`` and ``polar_candidates``),
 and no hang (the batch harness's watchdog).
 
 npz inputs: ``python -m sim run``, ``python -m golden run`` and ``python -m sim check`` (in
@@ -609,7 +609,7 @@ def _config_params(config):
     """The pipeline parameters of an RTL configuration (its model's key)."""
     data = {"image": {"width": RTL_SIZE, "height": RTL_SIZE},
             "shading": RTL_CONFIGS[config]["shading"],
-            "lights": [S.LIGHT] * RTL_CONFIGS[config].get("lights", 1),
+            "lights": [S.DEFAULTS["lights"][0]] * RTL_CONFIGS[config].get("lights", 1),
             **({"bump": RTL_CONFIGS[config]["bump"]} if "bump" in RTL_CONFIGS[config] else {})}
     return S.pipeline_params(S.parse(data, "config"))
 

@@ -2,7 +2,7 @@
 one group of formats at a time (part of ``make accuracy``).
 
 For each gallery scene: the float ideal against the reference (the method's own error), then
-the ideal with one group of stages run as their models instead (``scene.driver.ideal``'s
+the ideal with one group of stages run as their models instead (``scene.models.ideal``'s
 ``formats``): the raster (its vertex positions' 4 sub-pixel bits, its vertex values' and edge
 constants' 14 and 15 fraction bits), the texels (the map's 8-bit codes, or 12-bit angles), the
 shading (phong, fenney_dot, fenney_polar, bump_polar: their tables and widths), the power, the

@@ -1,13 +1,16 @@
-"""The framebuffer's model: the depth test, the frame, and the board's storage formats.
+"""The framebuffer's model: the depth test, the frame, the board's storage formats, and the
+reference picture (``reference``: per-pixel Phong in float64, ``reference.png``).
 
-One implementation serves the renderer (``scene/driver.py``: the model, ideal and reference
-pictures, in float) and the board (``board/framebuffer.py``'s RTL, in raw integers and
+One implementation serves the renderer (``scene/models.py``: the model and ideal pictures,
+in float) and the board (``board/framebuffer.py``'s RTL, in raw integers and
 RGB565): ``framebuffer`` is the depth test; ``board_frame`` is what the board's planes hold
 after it; ``screen`` is what its scan-out shows.
 """
 import numpy as np
 
-__all__ = ["framebuffer", "rgb565", "expand565", "board_frame", "screen", "CLEAR"]
+from golden import bump as bumps, raster as raster_model, shade
+
+__all__ = ["framebuffer", "reference", "rgb565", "expand565", "board_frame", "screen", "CLEAR"]
 
 CLEAR = -(1 << 15)            # the board's cleared depth: the least s16
 
@@ -64,3 +67,37 @@ def screen(img, factor, x0, y0, width=640, height=480):
     big = np.repeat(np.repeat(img, factor, 0), factor, 1)
     out[y0:y0 + big.shape[0], x0:x0 + big.shape[1]] = big
     return out
+
+
+def reference(prep):
+    """Per-pixel Phong in float64, exact power: each covered pixel's normal interpolated
+    (affine in screen space) from the exact vertex normals at the exact projected vertices,
+    normalised; the same coverage and the depth test on the exact 1/z."""
+    scene, q, fl = prep["scene"], prep["params"], prep["float"]
+    x = np.stack([prep["inputs"][f"x{c}"] for c in range(3)], -1)
+    y = np.stack([prep["inputs"][f"y{c}"] for c in range(3)], -1)
+    tri, px, py = raster_model.coverage(x, y, q["sub_bits"], q["screen_bits"])
+    sx, sy = fl["sx"][tri], fl["sy"][tri]
+    cx, cy = px + 0.5, py + 0.5
+    det = (sx[:, 1] - sx[:, 0]) * (sy[:, 2] - sy[:, 0]) - (sx[:, 2] - sx[:, 0]) * (sy[:, 1] - sy[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b1 = ((cx - sx[:, 0]) * (sy[:, 2] - sy[:, 0]) - (sx[:, 2] - sx[:, 0]) * (cy - sy[:, 0])) / det
+        b2 = ((sx[:, 1] - sx[:, 0]) * (cy - sy[:, 0]) - (cx - sx[:, 0]) * (sy[:, 1] - sy[:, 0])) / det
+    w = np.stack([1 - b1 - b2, b1, b2], -1)
+    n = (w[..., None] * fl["N"][tri]).sum(1)
+    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+    b = prep["bump"]
+    if b:     # the texel's exact normal, in the pixel's interpolated tangent frame
+        st = (w[..., None] * b["st"][tri]).sum(1)
+        nt = bumps.sample(b["normals"], st, b["filter"])
+        T, B = ((w[..., None] * f[tri]).sum(1) for f in b["frames"][:2])
+        T = T - np.einsum("ij,ij->i", T, n)[:, None] * n
+        T = T / np.linalg.norm(T, axis=-1, keepdims=True)
+        B = np.cross(n, T)
+        n = nt[:, :1] * T + nt[:, 1:2] * B + nt[:, 2:] * n
+    d = [n @ L for L in fl["L"]]
+    p = [np.maximum(0, n @ Hv) ** scene["material"]["shininess"] if q["specular"]
+         else np.zeros(len(tri)) for Hv in fl["H"]]
+    rgb = shade.colour_float(scene, d, p)
+    depth = (w * fl["inv_z"][tri]).sum(1)
+    return framebuffer(prep["size"], px, py, depth, rgb, scene["image"]["background"])[:2]

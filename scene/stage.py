@@ -23,7 +23,21 @@ A stage subclasses :class:`Stage` and supplies
   own, and ``ports``: the streams it adds to the top (its memory port); ``host``: the loaded
   tables' write buses (``hdl.lut.WriteBus``), by key;
 - ``model(prep, frag, ch, bound)``: the same step in the float or integer model, on numpy
-  arrays per fragment; ``bound``: the tests' offsets, each stage takes the ones it knows.
+  arrays per fragment; ``bound``: the tests' offsets, each stage takes the ones it knows;
+  ``ideal(prep, frag, ch)``: its algorithm on reals; ``format_group``: the group of formats
+  it belongs to (``scene.models.ideal``); ``convert(ch, ideal)``: the values it gives, from
+  its model's formats to its ideal's reals (or back), for the stage after it;
+
+and, for the scene driver (``scene/prepare.py``), which never names a stage:
+
+- ``scene_params(scene)``: the build parameters its scene keys set (a classmethod);
+- ``prepare(scene, view, data)``: its data for a scene (encodings, per-triangle constants),
+  given the view (``scene.prepare.view``) and the data of the stages before it; it may set
+  a size the data decides in ``self.q``; ``prep["data"]`` holds them all for its models;
+- ``vertex_values(data)``: its channels' values at the drawn triangles' vertices,
+  ``{name: (n, 3)}``; ``triangle_values(data)``: raster inputs of its own per triangle (edge
+  constants), raw and unrounded; ``flat_values(data)``: its flat words, ``{name: (n,)}``;
+- ``memory_image(data)``: the texture memory's words, where it has a texture.
 
 :class:`StageUnit` makes a stage a component with ``i`` and ``o`` streams, so the composed top
 joins stages with ``wiring.connect``. Inside a stage the units share one enable (the
@@ -36,11 +50,17 @@ from amaranth.lib.wiring import In, Out
 
 from hdl.fixed import layout
 from hdl.setup_unit.formats import VALUE
+from hdl.shade_unit.formats import POWER
 from hdl.unit import Pipeline
 
 from . import host as hostport
 
-__all__ = ["Stage", "StageUnit", "Link", "lanes", "lane_key", "raw"]
+__all__ = ["Stage", "StageUnit", "Link", "SceneError", "convert_powers", "lanes", "lane_key",
+           "raw"]
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be rendered: the message names the key."""
 
 
 class Stage:
@@ -91,7 +111,7 @@ class Stage:
 
     def ideal(self, prep, frag, ch):
         """The stage's algorithm in float64 with no format: exact functions for its tables,
-        no rounding or saturation (``scene.driver.ideal``); values by name, reals."""
+        no rounding or saturation (``scene.models.ideal``); values by name, reals."""
         raise NotImplementedError(f"{self.name}: no ideal model")
 
     def build(self, m, i, o, v, uni, ports, host, platform=None):
@@ -113,6 +133,31 @@ class Stage:
 
     def model(self, prep, frag, ch, bound):
         raise NotImplementedError
+
+    format_group = "power"
+
+    def convert(self, ch, ideal):
+        """The values it gives, its model's formats to reals (``ideal``) or back."""
+        return ch
+
+    @classmethod
+    def scene_params(cls, scene):
+        return {}
+
+    def prepare(self, scene, view, data):
+        return {}
+
+    def vertex_values(self, data):
+        return {}
+
+    def triangle_values(self, data):
+        return {}, {}
+
+    def flat_values(self, data):
+        return {}
+
+    def memory_image(self, data):
+        return None
 
     def describe(self):
         """The stage in ``metrics.json``: its unit, why, its parameters and latency."""
@@ -187,6 +232,14 @@ def raw(x, fmt=VALUE):
     """A real value as a format's raw integer (a channel's: ``VALUE``), rounded, saturated."""
     return np.clip(np.rint(np.asarray(x) * 2.0 ** fmt.frac_bits), fmt.min,
                    fmt.max).astype(np.int64)
+
+
+def convert_powers(ch, ideal):
+    """A stage's powers ``p<k>``: POWER LSBs to reals (``ideal``) or back."""
+    ch = dict(ch)
+    for k in [k for k in ch if k[0] == "p" and k[1:].isdigit()]:
+        ch[k] = ch[k] * POWER.lsb if ideal else np.rint(ch[k] / POWER.lsb).astype(np.int64)
+    return ch
 
 
 def lanes(q):

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scene import driver as S
+from scene import driver as S, obj
 
 from hdl.units import make_unit
 
@@ -130,7 +130,7 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
     metrics = {"scene": scene["name"], "method": params["method"],
                "bump": scene["bump"]["method"], "simulator": simulator,
                "size": list(prep["size"]), "triangles": prep["triangles"],
-               **({"mesh": S.obj.read(scene["mesh"]["file"]).counts}
+               **({"mesh": obj.read(scene["mesh"]["file"]).counts}
                   if scene["mesh"]["shape"] == "obj" else {}),
                "fragments": n, "fragments_model": n_model, "cycles": info["cycles"],
                "fragments_per_clock": round(n / info["cycles"], 4) if info["cycles"] else None,

@@ -7,7 +7,7 @@ from PIL import Image
 from golden.bump import (MAPS, BumpError, frames_from_uv, grid_frames, height_map,
                          polar_texels, sr_texels, tangent_normals, xz_texels)
 from golden.fenney import texel_decode
-from scene.driver import _grid_triangles
+from scene.mesh import grid_triangles
 
 
 def _angle(a, b):
@@ -59,7 +59,7 @@ def test_analytic_frames_against_frames_from_texture_coordinates(shape, m, n):
         i, j = np.meshgrid(np.arange(mm), np.arange(nn), indexing="ij")
         pos = np.stack([2 * i / m - 1, 2 * j / n - 1, 0 * i], -1).reshape(-1, 3)
         uv = np.stack([i / m, j / n], -1).reshape(-1, 2)
-        tris, inner = _grid_triangles(mm, nn, False, False), np.ones(mm * nn, bool)
+        tris, inner = grid_triangles(mm, nn, False, False), np.ones(mm * nn, bool)
         half = 0.0
     else:
         R, r = (1.0, 0.5) if shape == "torus" else (1.0, 0.0)
@@ -67,7 +67,7 @@ def test_analytic_frames_against_frames_from_texture_coordinates(shape, m, n):
         radial = np.stack([T[:, 1], -T[:, 0], 0 * T[:, 0]], -1)     # (cos phi, sin phi, 0)
         pos = r * N + R * (N if shape == "sphere" else radial)
         uv = np.stack([i / m, j / n], -1).reshape(-1, 2)
-        tris = _grid_triangles(m, rows, False, False)      # no wrap: no seam in (s, t)
+        tris = grid_triangles(m, rows, False, False)      # no wrap: no seam in (s, t)
         p = pos[tris]
         tris = tris[np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=-1)
                     > 1e-12]

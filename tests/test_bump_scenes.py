@@ -32,7 +32,7 @@ import itertools
 import numpy as np
 import pytest
 
-from golden import bump as bumps, fenney
+from golden import angular, bump as bumps, fenney
 from scene import driver as S
 from scene.pipeline import ScenePipeline, units_in
 from sim.simulators import available
@@ -226,8 +226,8 @@ def _angular_outputs(prep, ch, **offsets):
     texture, stage = prep["pipeline"].stages[1:3]
     inp = stage.inputs(prep, texture.model(prep, None, ch, offsets), offsets)
     params = {**stage.unit.params, "shininess": stage.shininess(prep["scene"])}   # loaded
-    return (S.angular.bump_polar_float(inp, **params),
-            S.angular.bump_polar_bounds(inp, **params))
+    return (angular.bump_polar_float(inp, **params),
+            angular.bump_polar_bounds(inp, **params))
 
 
 def _angular_interval(prep, ch):
@@ -278,7 +278,7 @@ def test_angular_flat_map_gives_the_unbumped_surface():
                  shading={"specular": False})
     frag, ch = S.model_fragments(prep)
     turn = 2 * np.pi
-    n = S.angular.to_vector(ch["phin"] * turn, ch["thetan"] * turn)
+    n = angular.to_vector(ch["phin"] * turn, ch["thetan"] * turn)
     exact = np.clip(n @ prep["float"]["L"][0], 0, 1)
     lo, hi = _angular_interval(prep, ch)
     assert (exact >= lo["d0"] - 2.0 ** -14).all() and (exact <= hi["d0"] + 2.0 ** -14).all()
@@ -320,7 +320,7 @@ def test_below_the_horizon_takes_the_horizon():
     prep = _prep(lights=[{"to_light": [0.3, 0.2, -1.0]}])
     c = _constants(prep)
     T, B, N = (f.mean(1) for f in prep["bump"]["frames"])
-    below = (N @ S._unit([0.3, 0.2, -1.0])) < -0.05
+    below = (N @ S.unit([0.3, 0.2, -1.0])) < -0.05
     assert below.sum() > 10
     assert (c["l0_k2"][below] == 0).all() and (c["l0_k3"][below] == 255).all()
     assert (c["l0_k1"] == 0).all()
@@ -331,9 +331,9 @@ def test_polar_constants_rebuild_the_light():
     8-bit steps: sin and cos of T from k2, k3 within 0.5/255, Q within half of 1/256 turn."""
     prep = _prep()
     c, b = _constants(prep), prep["bump"]
-    Nt = S._unit(b["frames"][2].sum(1))
+    Nt = S.unit(b["frames"][2].sum(1))
     Tt = b["frames"][0].sum(1)
-    Tt = S._unit(Tt - (Tt * Nt).sum(1)[:, None] * Nt)
+    Tt = S.unit(Tt - (Tt * Nt).sum(1)[:, None] * Nt)
     Bt = np.cross(Nt, Tt)
     L = prep["float"]["L"][0]
     up = Nt @ L > 0.05

@@ -147,7 +147,7 @@ def test_writes_follow_the_address_map():
     from hdl.shade_unit.power import power_lut
     np.testing.assert_array_equal(table, power_lut(32.0, 6).contents)
     np.testing.assert_array_equal(data[addr >= host.TEXTURE], prep["pipeline"].stages[1]
-                                  .image({"bump": prep["bump"]}))
+                                  .memory_image(prep["data"]))
     assert [r["addr"] for r in host.address_map(pipe)][-2:] == ["0x010000", "0x100000"]
 
 

@@ -221,7 +221,7 @@ def test_one_pixel_triangle():
                                 (10 * S_ + 4, 11 * S_ - 2)]):
         one[f"x{k}"][:], one[f"y{k}"][:] = x, y
     prep = {**prep, "inputs": one}
-    out, _ = simulate("scene", prep["params"], S.host.stream(one, prep["load"]), "amaranth")
+    out, _ = simulate("scene", prep["params"], S.rtl_inputs(prep), "amaranth")
     assert (list(out["x"]), list(out["y"])) == ([10], [10])
     img, cov, n = S.model(prep)
     assert n == 1 and cov.sum() == 1

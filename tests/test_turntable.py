@@ -29,7 +29,7 @@ def test_a_frame_is_the_scene_turned():
     rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
     orbit = variant(S.parse(base), "xshading", 1, 3)
     prep = _inputs_equal(orbit, S.parse({**base, "lights": [
-        {"to_light": list(rz @ np.array(S.LIGHT["to_light"]))}]}))
+        {"to_light": list(rz @ np.array(S.DEFAULTS["lights"][0]["to_light"]))}]}))
     assert prep["triangles"]["drawn"] > 0
     with pytest.raises(S.SceneError, match="turntable.frame: must be below turntable.frames"):
         S.parse({"turntable": {"frame": 3, "frames": 3}})

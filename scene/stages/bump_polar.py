@@ -9,7 +9,7 @@ from hdl.fixed import Field, binary_angle
 from hdl.illum_unit.bump_polar import BumpPolar as Unit
 from hdl.setup_unit.formats import VALUE
 
-from ..stage import Stage, raw
+from ..stage import Stage, convert_powers, raw
 from .texture import ANGLE_BITS
 
 LIGHT = ("phi_l", "theta_l", "phi_h", "theta_h")      # L and H in polar form, world frame
@@ -54,6 +54,54 @@ class BumpPolar(Stage):
             phi, theta = angular.to_polar(vec)
             out[f"phi_{n}"], out[f"theta_{n}"] = angle(phi), angle(theta)
         return out
+
+    @classmethod
+    def scene_params(cls, scene):
+        return {"rotation": scene["bump"]["rotation"]}
+
+    def prepare(self, scene, view, data):
+        """The normal's angles (seed 003: phi from x, theta from z) and the twist psi of the
+        texture's frame about N from the rotations' frame (e_theta, e_phi, N), in turns; each
+        unwrapped within half a turn of the first vertex's, as the texture coordinates.
+        theta_N = 0 (the hard case): phi_N means nothing there, so each triangle takes, at
+        such a vertex, the mean direction of its other vertices' phi_N (the normal crosses
+        the pole along it); the twist follows from that phi."""
+        T, N = data["frames"][0], data["frames"][2]
+        phi, theta = angular.to_polar(N)
+        pole = np.sin(theta) < 1e-9
+        other = np.where(pole, 0.0, 1.0)
+        mean = np.arctan2((other * np.sin(phi)).sum(1), (other * np.cos(phi)).sum(1))
+        phi = np.where(pole, mean[:, None], phi)
+        e_t = np.stack([np.cos(theta) * np.cos(phi), np.cos(theta) * np.sin(phi),
+                        -np.sin(theta)], -1)
+        e_p = np.stack([-np.sin(phi), np.cos(phi), np.zeros_like(phi)], -1)
+        psi = np.arctan2(np.einsum("...i,...i", T, e_p), np.einsum("...i,...i", T, e_t))
+        turns = lambda a: a / (2 * np.pi)
+        wrap = lambda a: a[:, :1] + np.mod(a - a[:, :1] + 0.5, 1.0) - 0.5
+        angles = {"phin": wrap(turns(phi)), "thetan": turns(theta), "psi": wrap(turns(psi))}
+        for k in ("phin", "psi"):
+            angles[k] -= np.floor(angles[k].min(axis=1, keepdims=True))
+        return {"angles": angles}
+
+    def vertex_values(self, data):
+        return data["angles"]
+
+    format_group = "shading"
+
+    def convert(self, ch, ideal):
+        """The texel's codes, polar angles in turns * 2**ANGLE_BITS (theta, phi), or the
+        normal they hold; its power p0."""
+        ch = convert_powers(ch, ideal)
+        if ideal and "_hi" in ch:
+            hi, lo = np.asarray(ch.pop("_hi"), float), np.asarray(ch.pop("_lo"), float)
+            turn = 2 * np.pi / (1 << ANGLE_BITS)
+            ch["_n"] = angular.to_vector(lo * turn, hi * turn)
+        elif not ideal and "_n" in ch:
+            phi, theta = angular.to_polar(ch.pop("_n"))
+            scale = (1 << ANGLE_BITS) / (2 * np.pi)
+            ch["_hi"], ch["_lo"] = (np.rint(a * scale).astype(np.int64) % (1 << ANGLE_BITS)
+                                    for a in (theta, phi))
+        return ch
 
     def validate(self, q):
         if q["lights"] != 1:

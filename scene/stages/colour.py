@@ -11,6 +11,7 @@ from ..stage import Stage, raw
 
 class Colour(Stage):
     name = "colour"
+    format_group = "colour"
     why = "material, lights"
 
     @property

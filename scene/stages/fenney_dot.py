@@ -3,9 +3,9 @@ vector, L' and H' in the tangent frame, quadratic with each vector's own per-edg
 (seed 000 section 2) or linear: N.L and N.H per light."""
 import numpy as np
 
-from golden import fenney
+from golden import bump as bumps, fenney
 from hdl.illum_unit.fenney_dot import FenneyDot as Unit, dot_lanes
-from hdl.setup_unit.formats import VALUE
+from hdl.setup_unit.formats import EDGE, VALUE
 from amaranth.hdl import Cat, Const, Mux
 
 from ..stage import Stage, lane_key, raw
@@ -38,6 +38,37 @@ class FenneyDot(Stage):
     def why(self):
         vectors = f"L{' and H' if self.q['specular'] else ''} per light"
         return f"bump.method = fenney_xz: {len(self.lanes)} lanes ({vectors})"
+
+    format_group = "shading"
+
+    @classmethod
+    def scene_params(cls, scene):
+        return {"normalize": True} if scene["bump"]["renormalize"] else {}
+
+    def prepare(self, scene, view, data):
+        """Each vertex's L' and H' in its own tangent frame (they vary over the surface), in
+        the patent's axes (T, N, B: y out), and each vector's per-edge constants
+        (L'i.L'j - 1)/2 (seed 000 section 2), raw and unrounded."""
+        frames, lanes = data["frames"], self.lanes
+        vectors, consts, real = {}, {}, {}
+        for n, (t, k) in enumerate(lanes):
+            light = (view.L if t == "l" else view.H)[k]
+            vec = np.stack([bumps.to_tangent(light, *(f[:, c] for f in frames))
+                            for c in range(3)], 1)[..., [0, 2, 1]]             # (n, 3, 3)
+            vectors[f"{t}{k}"] = vec
+            for (a, c), name in zip(((0, 1), (0, 2), (1, 2)), ("01", "02", "12")):
+                dots = np.einsum("ij,ij->i", vec[:, a], vec[:, c])
+                consts[f"e{name}_{1 + n}"] = np.minimum(raw((dots - 1) / 2, EDGE), 0)
+                real[f"e{name}_{1 + n}"] = np.minimum((dots - 1) / 2, 0) / EDGE.lsb
+        hi, lo = data["texels"]
+        return {"vectors": vectors, "constants": consts, "real_edges": real, "X": hi, "Z": lo}
+
+    def vertex_values(self, data):
+        return {f"{lane}{a}": vec[..., j] for lane, vec in data["vectors"].items()
+                for j, a in enumerate("xyz")}
+
+    def triangle_values(self, data):
+        return data["constants"], data["real_edges"]
 
     @property
     def latency(self):

@@ -4,10 +4,11 @@ raster carries as one flat word per lane; the power of the H lanes is the power 
 import numpy as np
 from amaranth.hdl import Cat, Const
 
-from golden import fenney
+from golden import bump as bumps, fenney
 from hdl.illum_unit.fenney_polar import FenneyPolar as Unit, polar_lanes
 from hdl.setup_unit.formats import VALUE
 
+from ..mesh import unit
 from ..stage import Stage, lane_key
 
 CONSTANTS = ("k1", "k2", "k3", "q")     # a flat word, k1 at the top, 8 bits each
@@ -41,6 +42,51 @@ class FenneyPolar(Stage):
         unit = Unit.spec(**self.params)
         return unit.latency - unit.power.latency          # its lanes; the power is a stage
 
+    format_group = "shading"
+
+    def prepare(self, scene, view, data):
+        """The triangle's tangent frame: the mean of its vertices' frames, made orthonormal
+        (N, T against N, B = N x T). L and H in it as elevation T_L (degrees above the
+        surface plane) and rotation Q from the tangent; k1 = 0, k2 = sin T_L, k3 = cos T_L
+        (h = 1, eq 1-4), each * 255, and Q in turns * 256. A light below the surface's
+        horizon is taken at T_L = 0: the patent's 8-bit k2 is unsigned (docs/bump.md)."""
+        frames = data["frames"]
+        Nt = unit(frames[2].sum(1))
+        Tt = frames[0].sum(1)
+        Tt = unit(Tt - np.einsum("ij,ij->i", Tt, Nt)[:, None] * Nt)
+        Bt = np.cross(Nt, Tt)
+        consts, held = {}, {}
+        for t, k in self.lanes:
+            v = bumps.to_tangent((view.L if t == "l" else view.H)[k], Tt, Bt, Nt)
+            elev = np.arcsin(np.clip(v[:, 2], 0.0, 1.0))
+            rot = np.arctan2(v[:, 1], v[:, 0])
+            consts[f"{t}{k}_k1"] = np.zeros(len(v), np.int64)
+            consts[f"{t}{k}_k2"] = np.rint(255 * np.sin(elev)).astype(np.int64)
+            consts[f"{t}{k}_k3"] = np.rint(255 * np.cos(elev)).astype(np.int64)
+            consts[f"{t}{k}_q"] = np.rint(rot / (2 * np.pi) * 256).astype(np.int64) % 256
+            held[f"{t}{k}"] = (elev, rot)                 # the same, unrounded
+        return {"constants": consts, "held": held}
+
+    def flat_values(self, data):
+        c = data["constants"]
+        return {f"_k{t}{k}": pack({n: c[f"{t}{k}_{n}"] for n in CONSTANTS})
+                for t, k in self.lanes}
+
+    def convert(self, ch, ideal):
+        """The texel's codes S and R (the patent's: S in quarter turns * 256, R in turns *
+        256), or the normal they hold."""
+        ch = dict(ch)
+        if ideal and "_hi" in ch:
+            hi, lo = np.asarray(ch.pop("_hi"), float), np.asarray(ch.pop("_lo"), float)
+            s_ang, r_ang = hi / 256 * (np.pi / 2), lo / 256 * (2 * np.pi)
+            ch["_n"] = np.stack([np.cos(s_ang) * np.cos(r_ang), np.cos(s_ang) * np.sin(r_ang),
+                                 np.sin(s_ang)], -1)
+        elif not ideal and "_n" in ch:
+            n = ch.pop("_n")
+            ch["_hi"] = np.arcsin(np.clip(n[:, 2], 0, 1)) / (np.pi / 2) * 256
+            ch["_lo"] = np.mod(np.arctan2(n[:, 1], n[:, 0]) / (2 * np.pi) * 256, 256)
+        return ch
+
     def rtl(self, p, v, uni):
         for t, k in self.lanes:
             word = v.pop(f"_k{t}{k}")
@@ -66,7 +112,7 @@ class FenneyPolar(Stage):
         r_ang = np.arctan2(n[:, 1], n[:, 0])
         for t, k in self.lanes:
             ch.pop(f"_k{t}{k}")
-            elev, rot = (x[frag["tri"]] for x in prep["bump"]["held"][f"{t}{k}"])
+            elev, rot = (x[frag["tri"]] for x in prep["data"]["held"][f"{t}{k}"])
             ch[lane_key(t, k)] = np.clip(np.sin(elev) * np.sin(s_ang) + np.cos(elev)
                                          * np.cos(s_ang) * np.cos(r_ang - rot), 0, 1)
         return ch

@@ -12,6 +12,7 @@ from ..stage import Stage, raw
 
 class Phong(Stage):
     name = "phong"
+    format_group = "shading"
     channels = tuple((f"n{a}", "linear", 0) for a in "xyz")
     why = "shading.method = phong"
     when = {"method": "phong"}

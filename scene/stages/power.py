@@ -13,7 +13,7 @@ from hdl.illum_unit.fenney_power import FenneyPower, power_lanes as fenney_lanes
 from hdl.setup_unit.formats import VALUE
 from hdl.shade_unit.power import PowerTable, power_lut, power_lanes
 
-from ..stage import Stage, raw
+from ..stage import Stage, convert_powers, raw
 
 SHAPE = PowerTable.PARAMS["shininess"]    # the table's shape only: its contents are loaded
 
@@ -32,6 +32,9 @@ class Power(Stage):
     @classmethod
     def wanted(cls, q):
         return q["specular"] and q["bump"] != "angular"     # bump_polar has its own table
+
+    def convert(self, ch, ideal):
+        return convert_powers(ch, ideal)
 
     @property
     def name(self):

@@ -13,6 +13,7 @@ from ..stage import Stage
 
 class Raster(Stage):
     name = "raster"
+    format_group = "raster"
 
     @property
     def channels(self):

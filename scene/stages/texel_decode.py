@@ -23,6 +23,14 @@ class TexelDecode(Stage):
         v.pop("invalid")             # decoded by the guard's rule (docs/bump.md)
         return v
 
+    format_group = "texels"
+
+    def convert(self, ch, ideal):
+        """The decoded vector: L1 length 255 (the model's) or 1 (the ideal's)."""
+        if not all(a in ch for a in "xyz"):
+            return ch
+        return {**ch, **{a: ch[a] / 255.0 if ideal else ch[a] * 255.0 for a in "xyz"}}
+
     def ideal(self, prep, frag, ch):
         """The normal as the patent's X/Z texel holds it, unrounded: in its axes (x along T,
         y out, z along B), of L1 length 1."""

@@ -17,6 +17,7 @@ from amaranth.lib.wiring import In, Out
 
 from golden import bump as bumps
 from hdl.fixed import Field, layout, u
+from hdl.setup_unit.formats import VALUE
 from hdl.lut import WriteBus, blank_lut, rom
 from hdl.texture_unit import (ADDR, CACHE_LATENCY, MAX_TEXTURE, address_stages, banks, filter_stages,
                               filtered, lines, memory_image, request_fields, response_fields,
@@ -24,7 +25,8 @@ from hdl.texture_unit import (ADDR, CACHE_LATENCY, MAX_TEXTURE, address_stages, 
 from hdl.unit import Pipeline
 
 from ..host import equals
-from ..stage import Link, Stage, raw
+from ..mesh import tangent_frames, texcoords
+from ..stage import Link, SceneError, Stage, raw
 
 ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotation's default)
 MEMORIES = ("external", "onchip")
@@ -54,6 +56,7 @@ CACHE = ("cache_lines", "cache_line", "cache_ways", "tex_queue", "bank_ports")
 class Texture(Stage):
     bump = True
     name = "texture"
+    format_group = "texels"
     channels = (("s", "linear", 0), ("t", "linear", 0))
 
     @classmethod
@@ -197,22 +200,68 @@ class Texture(Stage):
             busy = busy | valid
         return v, busy
 
-    def image(self, prep):
+    def prepare(self, scene, view, data):
+        """The map's texels (``golden.bump.bump_texels``), whose size sets ``bump_size``; each
+        drawn triangle's texture coordinates and its vertices' tangent frames.
+
+        A vertex's (s, t) is taken within half a period of the first vertex's (so a triangle
+        across the mesh's seam does not run back over the whole texture), then every vertex
+        is shifted by the same whole tiles so that the least lies in [0, 1): the texture
+        repeats every tile, so the shift changes nothing but keeps the values in the
+        raster's [-2, 2). A triangle may span less than one tile."""
+        b = scene["bump"]
+        try:
+            hi, lo, normals = bumps.bump_texels(self.kind, b["map"], b["size"], b["depth"],
+                                                ANGLE_BITS)
+        except bumps.BumpError as e:           # its message names bump.map
+            raise SceneError(str(e)) from None
+        size = hi.shape[0]
+        if hi.shape[0] != hi.shape[1] or size & (size - 1) or size > MAX_TEXTURE:
+            raise SceneError(f"bump.map: {b['map']!r} is {hi.shape[1]} x {hi.shape[0]} "
+                             f"texels; a texture ROM needs a square power of two up to "
+                             f"{MAX_TEXTURE}")
+        self.q["bump_size"] = size
+        period = np.array(b["repeat"], float)
+        uv, periodic = texcoords(scene)
+        st = uv[view.drawn]                                                   # (n, 3, 2)
+        st = np.where(periodic, st[:, :1] + np.mod(st - st[:, :1] + period / 2, period)
+                      - period / 2, st)
+        st -= np.floor(st.min(axis=1, keepdims=True))
+        span = st.max(axis=1) - st.min(axis=1)
+        if len(span) and span.max() >= 1.0 - VALUE.lsb:
+            k = int(np.argmax(span.max(axis=1)))
+            raise SceneError(
+                f"bump.repeat: a triangle spans {span.max():.3g} tiles of the bump map (along "
+                f"{'st'[int(np.argmax(span[k]))]}); the raster carries texture coordinates in "
+                f"[-2, 2), so a triangle may span less than one tile: " + (
+                    "use more mesh.segments or a smaller repeat"
+                    if scene["mesh"]["shape"] != "obj" else
+                    "give the OBJ finer texture coordinates, or a smaller repeat (without "
+                    "them, the cylindrical projection wraps whole turns around the triangles "
+                    "at the ends of its axis)"))
+        return {"st": st, "lanes": self.lanes, "normals": normals, "size": size,
+                "frames": [f[view.drawn] for f in tangent_frames(scene)],     # (n, 3, 3) each
+                "filter": b["filter"], "texels": (hi, lo)}
+
+    def vertex_values(self, data):
+        return {"s": data["st"][..., 0], "t": data["st"][..., 1]}
+
+    def memory_image(self, data):
         """The texture memory's words (``hdl.texture_unit.memory_image``'s layout)."""
-        hi, lo = prep["bump"]["texels"]
+        hi, lo = data["texels"]
         return memory_image(hi, lo, self.bits, self.q["filter"])
 
     def ideal(self, prep, frag, ch):
         """The map's exact normal (tangent frame, before any texel encoding) at the texture
         coordinates, nearest or bilinear as the texels (``golden.bump.sample``)."""
-        b = prep["bump"]
+        b = prep["data"]
         st = np.stack([ch["s"], ch["t"]], -1)
         return {**ch, "_n": bumps.sample(b["normals"], st, self.q["filter"])}
 
     def model(self, prep, frag, ch, bound):
         """The codes ``_hi``, ``_lo`` (``golden.bump.fetch``: nearest, or the bilinear filter
         bit for bit). ``bound``: ``ds``, ``dt`` added to the raw texture coordinates."""
-        hi, lo = prep["bump"]["texels"]
+        hi, lo = prep["data"]["texels"]
         rs, rt = raw(ch["s"]) + bound.get("ds", 0), raw(ch["t"]) + bound.get("dt", 0)
         return {**ch, "_hi": bumps.fetch(hi, rs, rt, self.q["filter"]),
                 "_lo": bumps.fetch(lo, rs, rt, self.q["filter"])}
