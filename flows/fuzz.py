@@ -38,7 +38,6 @@ import sys
 import time
 import traceback
 from collections import Counter
-from pathlib import Path
 
 import numpy as np
 import tomli_w
@@ -138,8 +137,13 @@ def valid_scene(draw, config=None):
 _WRONG = ["text", True, [1, 2], {"a": 1}, 7, 0.5, [], [[1.0, 2.0, 3.0]], ""]
 
 
+def _rules():
+    """Every scene key's rule: the base tables' and each stage's own (``scene.parse.tables``)."""
+    return S.tables()[1]
+
+
 def _keys():
-    return [(t, k) for t, rules in S.RULES.items() for k in rules]
+    return [(t, k) for t, rules in _rules().items() for k in rules]
 
 
 @st.composite
@@ -178,14 +182,14 @@ def malformed_scene(draw, tmp):
             st.sampled_from(["[", "]", "=", '"', "{", ",", "\x00", "é", "[[", "= ="])) + text[at:]
         return kind, text, None
     if kind == "type":
-        rule = S.RULES[table][key]
+        rule = _rules()[table][key]
         wrong = [v for v in _WRONG if not _fits(rule, v)]
         put(draw(st.sampled_from(wrong)))
     elif kind in ("range", "nonfinite"):
-        rule = S.RULES[table][key]
+        rule = _rules()[table][key]
         if rule[0] not in ("num", "int", "vec", "ints"):
             kind, table, key = "range", "image", "width"
-            path, rule = "image.width", S.RULES["image"]["width"]
+            path, rule = "image.width", _rules()["image"]["width"]
         if kind == "nonfinite":
             bad = draw(st.sampled_from([math.nan, math.inf, -math.inf]))
         else:
@@ -205,10 +209,10 @@ def malformed_scene(draw, tmp):
         else:
             put(bad)
     elif kind == "extreme":          # allowed by the contract, at its far ends
-        num = [(t, k) for t, k in _keys() if S.RULES[t][k][0] in ("num", "vec")]
+        num = [(t, k) for t, k in _keys() if _rules()[t][k][0] in ("num", "vec")]
         table, key = draw(st.sampled_from(num))
         path = f"lights[0].{key}" if table == "lights" else f"{table}.{key}"
-        rule = S.RULES[table][key]
+        rule = _rules()[table][key]
         lo, hi = rule[-2], rule[-1]
         value = draw(st.sampled_from([v for v in (lo, hi, 1e300, -1e300, 1e-300, 5e-324)
                                       if lo <= v <= hi and math.isfinite(v)] or [lo]))
@@ -510,7 +514,6 @@ def fuzz_npz(n, seed, tmp, log=None):
     from golden.__main__ import main as golden_main
     from hdl.units import UNITS, make_unit
     from sim.__main__ import main as sim_main
-    from sim.cli_common import write_outputs
     rng = np.random.default_rng(seed)
     tmp.mkdir(parents=True, exist_ok=True)
     counts, failures = Counter(), []

@@ -33,8 +33,6 @@ import argparse
 import fcntl
 import hashlib
 import json
-import statistics
-import sys
 import time
 from contextlib import contextmanager
 from pathlib import Path
@@ -278,7 +276,7 @@ def _image(cfg, simulator, key):
 
 def _exact_error(name, params, inputs, out):
     """``(|RTL - exact function|, what the unit is)`` per row."""
-    from golden import MODELS, angular, fenney
+    from golden import MODELS, angular
     if name in ("raster", "phong", "peercy"):        # float models: the exact function
         errs = MODELS[name].check(inputs, out, **params)
         return np.concatenate([e for e, _ in errs.values()]), "LSB of VALUE (2^-14)"

@@ -8,10 +8,11 @@ from pathlib import Path
 import numpy as np
 
 from . import obj
-from .pipeline import BUMPS, METHODS, STAGES, ScenePipeline, choose
+from . import pipeline
+from .pipeline import BUMPS, METHODS, ScenePipeline, choose
 from .stage import SceneError
 
-__all__ = ["SceneError", "DEFAULTS", "RULES", "parse", "load", "pipeline_params"]
+__all__ = ["SceneError", "DEFAULTS", "RULES", "tables", "parse", "load", "pipeline_params"]
 
 
 DEFAULTS = {
@@ -25,8 +26,7 @@ DEFAULTS = {
     "lights": [{"type": "directional", "to_light": [-1.0, -1.0, 2.0],
                 "color": [1.0, 1.0, 1.0]}],
     "shading": {"method": "xshading", "specular": True, "power": "table"},
-    "bump": {"method": "none", "map": "bricks", "size": 256, "repeat": [8.0, 2.0],
-             "depth": 1.0, "filter": "nearest", "rotation": "paper", "renormalize": False},
+    "bump": {"method": "none"},       # the rest of [bump]: the bump stages' scene_keys
     "turntable": {"spin": "light", "axis": [0.0, 0.0, 1.0], "degrees": 360.0, "frames": 24,
                   "frame": 0},
 }
@@ -50,14 +50,25 @@ RULES = {
                "color": ("vec", 3, 0.0, 2.0)},
     "shading": {"method": ("choice", METHODS), "specular": ("bool",),
                 "power": ("choice", ("table", "fenney"))},
-    "bump": {"method": ("choice", BUMPS), "map": ("str",), "size": ("int", 16, 4096),
-             "repeat": ("vec", 2, 1e-6, INF), "depth": ("num", 0.0, INF),
-             "filter": ("choice", ("nearest", "bilinear")),
-             "rotation": ("choice", ("paper", "exact")), "renormalize": ("bool",)},
+    "bump": {"method": ("choice", BUMPS)},
     "turntable": {"spin": ("choice", ("light", "mesh")), "axis": ("vec", 3, -INF, INF),
                   "degrees": ("num", -INF, INF), "frames": ("int", 1, 100000),
                   "frame": ("int", 0, 100000)},
 }
+
+
+def tables():
+    """``(defaults, rules)`` of every scene table: the ones above, and each stage's own keys
+    (its ``scene_keys``: ``{table: {key: (default, rule)}}``), read from the stage list as it
+    is now, so a new stage's keys are parsed, checked and fuzzed with no edit here."""
+    defaults = {t: dict(v) if isinstance(v, dict) else v for t, v in DEFAULTS.items()}
+    rules = {t: dict(v) for t, v in RULES.items()}
+    for cls in pipeline.STAGES:
+        for table, keys in cls.scene_keys.items():
+            for key, (default, rule) in keys.items():
+                defaults.setdefault(table, {})[key] = default
+                rules.setdefault(table, {})[key] = rule
+    return defaults, rules
 
 
 def _number(key, v, lo, hi, what="a finite number"):
@@ -107,22 +118,23 @@ def parse(data, name="scene", base=None):
     """A validated scene (every key filled in) from a parsed TOML document; ``base``: the
     directory a relative ``mesh.file`` is read from (the scene file's; default: the current
     one). ``mesh.file`` comes out absolute, so a parsed scene parses again to itself."""
-    unknown = sorted(set(data) - set(DEFAULTS))
+    defaults, rules = tables()
+    unknown = sorted(set(data) - set(defaults))
     if unknown:
-        raise SceneError(f"{unknown[0]}: unknown table (known: {', '.join(DEFAULTS)})")
+        raise SceneError(f"{unknown[0]}: unknown table (known: {', '.join(defaults)})")
     scene = {"name": name}
-    for key in DEFAULTS:
+    for key in defaults:
         if key == "lights":
-            lights = data.get("lights", DEFAULTS["lights"])
+            lights = data.get("lights", defaults["lights"])
             if not isinstance(lights, list) or not lights:
                 raise SceneError("lights: must be one or more [[lights]] tables")
-            scene["lights"] = [_table(f"lights[{k}]", l, LIGHT, RULES["lights"])
+            scene["lights"] = [_table(f"lights[{k}]", l, LIGHT, rules["lights"])
                                for k, l in enumerate(lights)]
             for k, l in enumerate(scene["lights"]):
                 if not any(l["to_light"]):
                     raise SceneError(f"lights[{k}].to_light: must not be the zero vector")
         else:
-            scene[key] = _table(key, data.get(key, {}), DEFAULTS[key], RULES[key])
+            scene[key] = _table(key, data.get(key, {}), defaults[key], rules[key])
     _mesh_file(scene["mesh"], base)
     if scene["bump"]["renormalize"] and scene["bump"]["method"] != "fenney_xz":
         raise SceneError(f"bump.renormalize: only with bump.method = \"fenney_xz\", not "
@@ -209,7 +221,7 @@ def pipeline_params(scene, bump_size=None, hardware=None):
     if b["method"] != "none":
         pipe.update(bump=b["method"], bump_size=bump_size or b["size"], filter=b["filter"])
     q = {**ScenePipeline.PARAMS, **pipe}
-    for cls in STAGES:          # the scene keys a stage reads for its build (scene_params)
+    for cls in pipeline.STAGES:     # the scene keys a stage reads for its build
         if cls.wanted(q):
             q.update(cls.scene_params(scene))
     return q

@@ -43,7 +43,7 @@ from .stages.raster import Raster
 from .stages.texel_decode import TexelDecode
 from .stages.texture import MEMORIES, Texture
 
-__all__ = ["ScenePipeline", "STAGES", "METHODS", "BUMPS", "choose", "units_in"]
+__all__ = ["ScenePipeline", "STAGES", "METHODS", "BUMPS", "wanted", "choose", "units_in"]
 
 STAGES = (Raster, Texture, TexelDecode, FenneyDot, FenneyPolar, BumpPolar, Phong, Power, Colour)
 METHODS = MODES + ("phong",)
@@ -197,10 +197,15 @@ class ScenePipeline(Unit):
 PIPELINES[ScenePipeline.NAME] = ScenePipeline
 
 
+def wanted(q):
+    """The stages that the pipeline's parameters ``q`` call for, as they are, unchecked."""
+    return [cls(q) for cls in STAGES if cls.wanted(q)]
+
+
 def choose(q):
     """The stages that the pipeline's parameters ``q`` call for, each validated, the raster
     joined to the channels and flat words they read. A ``ValueError`` names the scene key."""
-    stages = [cls(q) for cls in STAGES if cls.wanted(q)]
+    stages = wanted(q)
     for stage in stages:
         stage.validate(q)
     channels = [c for stage in stages for c in stage.channels]

@@ -23,7 +23,7 @@ from hdl.setup_unit.formats import EDGE, VALUE, coord
 from . import host
 from .mesh import mesh, turn, unit
 from .parse import SceneError, pipeline_params
-from .pipeline import STAGES, ScenePipeline
+from .pipeline import ScenePipeline, wanted
 from .stage import raw
 
 __all__ = ["prepare", "rtl_inputs", "view"]
@@ -83,7 +83,7 @@ def prepare(scene, hardware=None):
     v = view(scene, pipe)
     drawn = v.drawn
     data = {}              # the stages' own, each from the scene (the texture's first)
-    for stage in [cls(pipe) for cls in STAGES if cls.wanted(pipe)]:
+    for stage in wanted(pipe):
         data.update(stage.prepare(scene, v, data))     # may settle pipe (the map's size)
     try:                              # the build's choices (hardware) checked with the scene's
         spec = ScenePipeline.spec(**pipe)

@@ -30,6 +30,8 @@ A stage subclasses :class:`Stage` and supplies
 
 and, for the scene driver (``scene/prepare.py``), which never names a stage:
 
+- ``scene_keys``: its own keys of the scene file, ``{table: {key: (default, rule)}}`` (the
+  rules of ``scene/parse.py``), a table of its own or keys in a shared one;
 - ``scene_params(scene)``: the build parameters its scene keys set (a classmethod);
 - ``prepare(scene, view, data)``: its data for a scene (encodings, per-triangle constants),
   given the view (``scene.prepare.view``) and the data of the stages before it; it may set
@@ -72,6 +74,7 @@ class Stage:
     uniforms = ()
     params = {}
     why = ""
+    scene_keys = {}
 
     def __init__(self, q):
         self.q = q

@@ -21,7 +21,7 @@ from hdl.units import make_unit
 
 from .progress import watch
 from .simulators import COCOTB, available
-from .verilog import BUILD, ROOT, build_lock, export, prune_objects, verilator_env
+from .verilog import BUILD, ROOT, build_lock, design_key, export, prune_objects, verilator_env
 
 VERILATOR_ARGS = ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-PROCASSINIT", "-O2"]
 _built = {}
@@ -57,11 +57,11 @@ def build(name, params, simulator, *, waves=False):
     reason = available(simulator)
     if reason:
         raise SimulatorMissing(reason)
-    key = (name, json.dumps(params, sort_keys=True), simulator, waves)
+    design, tag = design_key(name, params)
+    key = (name, design, simulator, waves)
     if key in _built:
         return _built[key]
     from cocotb_tools.runner import get_runner
-    tag = hashlib.sha1(json.dumps(params, sort_keys=True).encode()).hexdigest()[:8]
     base = BUILD / "cocotb" / COCOTB[simulator] / (f"{name}-{tag}" + ("-waves" if waves else ""))
     build_dir = base / "obj"
     args = VERILATOR_ARGS if COCOTB[simulator] == "verilator" else []

@@ -14,7 +14,6 @@ import numpy as np
 
 from scene import driver as S, obj
 
-from hdl.units import make_unit
 
 from .stream import Memory
 from .verilog import BUILD, SCENES

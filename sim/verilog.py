@@ -1,5 +1,6 @@
 """Verilog export of registered units, and Verilator lint."""
 import fcntl
+import hashlib
 import json
 import os
 import subprocess
@@ -34,6 +35,16 @@ LINT_ACCEPTED = {
 
 
 TARGETS = ("generic", "ecp5")      # iCE40: the generic form (synth_ice40 -dsp infers SB_MAC16)
+
+
+def design_key(name, params):
+    """``(key, tag)``: what names a unit's build in a model cache, and its 8-hex digest: the
+    parameters, and a scene pipeline's stages by name (the list may grow, an effect added
+    to ``STAGES``, with the parameters unchanged)."""
+    unit = make_unit(name, spec=True, **params)
+    stages = [n for n, *_ in unit.parts()] if hasattr(unit, "parts") else None
+    key = json.dumps([params, stages], sort_keys=True)
+    return key, hashlib.sha1(key.encode()).hexdigest()[:8]
 
 
 def export(name, params=None, out_dir=None, module=None, target="generic"):

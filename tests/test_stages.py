@@ -1,6 +1,7 @@
 """The stage list (scene/pipeline.py): what each stage declares composes into the top, and a
-new effect is one file plus one line. The README's worked example
-(``docs/examples/depth_cue.py``) is put after ``Colour`` and rendered, RTL against its model."""
+new effect is one file plus one line. The README's worked examples (``docs/examples/``: the
+depth cue, and fog with a scene table and a channel of its own) are put after ``Colour`` and
+rendered, RTL against their models."""
 import importlib.util
 from pathlib import Path
 
@@ -10,14 +11,26 @@ import pytest
 from scene import driver as S, pipeline
 from scene.pipeline import ScenePipeline, units_in
 
-EXAMPLE = Path(__file__).resolve().parent.parent / "docs" / "examples" / "depth_cue.py"
+EXAMPLES = Path(__file__).resolve().parent.parent / "docs" / "examples"
 
 
-def _example():
-    spec = importlib.util.spec_from_file_location("depth_cue", EXAMPLE)
+def _example(name="depth_cue", cls="DepthCue"):
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    return mod.DepthCue
+    return getattr(mod, cls)
+
+
+def _rtl_and_model(prep):
+    """The RTL's picture on Amaranth's simulator and the model's, with the model's coverage."""
+    from sim.run import simulate
+    out, info = simulate("scene", prep["params"], S.rtl_inputs(prep), "amaranth")
+    img, cov, _ = S.model(prep)
+    rgb = np.stack([out[c] for c in "rgb"], -1).astype(np.uint8)
+    rtl, rcov = S.framebuffer(prep["size"], out["x"], out["y"], out["depth"], rgb,
+                              prep["scene"]["image"]["background"])
+    assert (rcov == cov).all() and cov.sum() > 100
+    return rtl, img, cov, info
 
 
 @pytest.mark.parametrize("scene", ["default", "phong", "bump_xz", "bump_polar", "bump_angular"])
@@ -35,7 +48,6 @@ def test_a_new_effect_is_one_file_and_one_line(monkeypatch):
     """The depth cue, added to the list: it is built (a submodule of its own, its uniform a
     port of the top), and the RTL's pixels are its model's on Amaranth's simulator, within
     the one level the default pipeline allows, and darker than without it."""
-    from sim.run import simulate
     cue = _example()
     data = {"image": {"width": 32, "height": 32}}
     plain = S.prepare(S.parse(data, "plain"))
@@ -43,16 +55,41 @@ def test_a_new_effect_is_one_file_and_one_line(monkeypatch):
     prep = S.prepare(S.parse(data, "cue"))
     assert [s.name for s in prep["pipeline"].stages][-2:] == ["colour", "depth_cue"]
     assert prep["uniforms"]["cue_near"] == 255
-    out, info = simulate("scene", prep["params"], S.rtl_inputs(prep), "amaranth")
+    rtl, img, cov, info = _rtl_and_model(prep)
     assert info["latency"] == prep["pipeline"].latency == plain["pipeline"].latency + 2 + 1   # its own, a slice
-    img, cov, _ = S.model(prep)
-    rgb = np.stack([out[c] for c in "rgb"], -1).astype(np.uint8)
-    rtl, rcov = S.framebuffer(prep["size"], out["x"], out["y"], out["depth"], rgb,
-                              prep["scene"]["image"]["background"])
-    assert (rcov == cov).all() and cov.sum() > 100
     assert np.abs(rtl.astype(int) - img.astype(int))[cov].max() <= 1
     before, _, _ = S.model(plain)
     assert (img[cov].astype(int) <= before[cov]).all() and (img[cov] < before[cov]).any()
+
+
+def test_an_effect_with_its_own_scene_table_and_channel(monkeypatch):
+    """Fog (``docs/examples/fog.py``), added by its file and one line: its ``[fog]`` table is
+    parsed with its rules (an unknown key, a far before the near, named in one line), its fog
+    factor rides the raster as a channel of its own, and the RTL's pixels are its model's
+    within the one level the default pipeline allows (the blend itself is exact integer
+    arithmetic in both: fog + (c - fog) w / 256). The far side of the torus is pulled toward
+    the fog's colour, the near side is not."""
+    fog = _example("fog", "Fog")
+    data = {"image": {"width": 32, "height": 32}, "fog": {"near": 3.4, "far": 4.6,
+                                                          "color": [1.0, 1.0, 1.0]}}
+    with pytest.raises(S.SceneError, match=r"^fog: unknown table"):
+        S.parse(data)                                        # not in the list yet
+    plain = S.prepare(S.parse({"image": data["image"]}, "plain"))
+    monkeypatch.setattr(pipeline, "STAGES", pipeline.STAGES + (fog,))
+    with pytest.raises(S.SceneError, match=r"^fog\.density: unknown key \(known: near, far, color\)$"):
+        S.parse({"fog": {"density": 1.0}})
+    with pytest.raises(S.SceneError, match=r"^fog\.far: must be beyond fog\.near \(3\.4\), not 3$"):
+        S.prepare(S.parse({"fog": {"near": 3.4, "far": 3.0}}))
+    prep = S.prepare(S.parse(data, "fog"))
+    assert [s.name for s in prep["pipeline"].stages][-2:] == ["colour", "fog"]
+    assert [n for n, _ in prep["pipeline"].channels][-1] == "fog"
+    assert [prep["uniforms"][f"fog_{c}"] for c in "rgb"] == [255, 255, 255]
+    rtl, img, cov, _ = _rtl_and_model(prep)
+    assert np.abs(rtl.astype(int) - img.astype(int))[cov].max() <= 1
+    before, _, _ = S.model(plain)
+    lifted = (img[cov].astype(int) - before[cov]).min(-1)
+    assert (lifted >= -1).all()                  # toward white, never away (1: the rounding)
+    assert (lifted > 40).mean() > 0.1 and (lifted <= 1).mean() > 0.1    # far fogged, near not
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -7,7 +7,7 @@ come out the same from a local process pool and from a Dask LocalCluster of two 
 import numpy as np
 import pytest
 
-from sim import tradeoffs as T
+from flows import tradeoffs as T
 
 TIMES = {"unit_test_wall_s", "cached"}       # wall times differ from run to run
 

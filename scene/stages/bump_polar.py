@@ -20,6 +20,7 @@ class BumpPolar(Stage):
     name = "bump_polar"
     channels = (("phin", "linear", 0), ("thetan", "linear", 0), ("psi", "linear", 0))
     when = {"bump": "angular"}
+    scene_keys = {"bump": {"rotation": ("paper", ("choice", ("paper", "exact")))}}
 
     @property
     def uniforms(self):

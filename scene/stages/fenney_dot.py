@@ -40,6 +40,7 @@ class FenneyDot(Stage):
         return f"bump.method = fenney_xz: {len(self.lanes)} lanes ({vectors})"
 
     format_group = "shading"
+    scene_keys = {"bump": {"renormalize": (False, ("bool",))}}
 
     @classmethod
     def scene_params(cls, scene):

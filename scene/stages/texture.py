@@ -11,6 +11,8 @@
 The texels are data: the driver encodes them from the scene's map (``golden.bump``) into the
 memory image, in one layout for both (``hdl.texture_unit.memory_image``); the hardware depends
 only on the map's size, the filter, the memory and the cache."""
+import math
+
 import numpy as np
 from amaranth.lib import stream
 from amaranth.lib.wiring import In, Out
@@ -19,7 +21,7 @@ from golden import bump as bumps
 from hdl.fixed import Field, layout, u
 from hdl.setup_unit.formats import VALUE
 from hdl.lut import WriteBus, blank_lut, rom
-from hdl.texture_unit import (ADDR, CACHE_LATENCY, MAX_TEXTURE, address_stages, banks, filter_stages,
+from hdl.texture_unit import (ADDR, CACHE_LATENCY, FILTERS, MAX_TEXTURE, address_stages, banks, filter_stages,
                               filtered, lines, memory_image, request_fields, response_fields,
                               texel_cache)
 from hdl.unit import Pipeline
@@ -57,6 +59,10 @@ class Texture(Stage):
     bump = True
     name = "texture"
     format_group = "texels"
+    scene_keys = {"bump": {"map": ("bricks", ("str",)), "size": (256, ("int", 16, 4096)),
+                           "repeat": ([8.0, 2.0], ("vec", 2, 1e-6, math.inf)),
+                           "depth": (1.0, ("num", 0.0, math.inf)),
+                           "filter": ("nearest", ("choice", FILTERS))}}
     channels = (("s", "linear", 0), ("t", "linear", 0))
 
     @classmethod

@@ -22,7 +22,7 @@ import numpy as np
 
 from hdl.units import make_unit
 
-from ..verilog import BUILD, build_lock, export, prune_objects, verilator_env
+from ..verilog import BUILD, build_lock, design_key, export, prune_objects, verilator_env
 
 HARNESS = Path(__file__).with_name("harness.cpp")
 SHM = "/dev/shm"        # the exchange files in memory where the system has it
@@ -138,11 +138,11 @@ def verilate(top, src, harness, base, cflags, opt, extra=()):
 
 def build(name, params, *, trace=False):
     """Build (or find in the cache) the harness for a unit; returns the executable's path."""
-    key = (name, json.dumps(params, sort_keys=True), trace)
+    design, tag = design_key(name, params)
+    key = (name, design, trace)
     if key in _built:
         return _built[key]
     unit = make_unit(name, spec=True, **params)
-    tag = hashlib.sha1(json.dumps(params, sort_keys=True).encode()).hexdigest()[:8]
     base = BUILD / "batch" / (f"{name}-{tag}{OPT}" + ("-trace" if trace else ""))
     exe = base / "obj" / "harness"
     with build_lock(base.parent / f"{base.name}.lock"):
