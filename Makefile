@@ -48,7 +48,7 @@ bitstream: setup
 
 # Every test: models, RTL on Amaranth's simulator, cocotb on Icarus and Verilator.
 test: setup
-	$(PY) -m pytest -n $(JOBS) --dist loadgroup
+	$(PY) -m pytest -n $(JOBS) --dist loadgroup --durations=25
 
 # Verilog of every unit into build/verilog/, each linted by Verilator (-Wall); SCENE=...: that
 # scene's pipeline. TARGET=ecp5: the form make fpga places (MULT18X18D with their registers;
