@@ -52,19 +52,29 @@ SLACK = 20           # BMC depth beyond the longest bound
 COUNT = 10           # bits of the transfer counters (depths stay below 2**COUNT)
 PROVE_DEPTH = 4      # k-induction's depth
 
-# the pipelines: one per method and bump method, at the smallest sizes (the proof is about
-# the streams, which do not depend on the sizes), the texture through its memory port
+# the pipelines at the smallest sizes (the proof is about the streams, which do not depend on
+# the sizes), the texture through its memory port
 SMALL = {"screen_bits": 4, "bump_size": 16, "cache_lines": 2, "cache_ways": 1,
          "tex_queue": 4}
-PIPELINES = {
-    "scene_linear": {"method": "linear"},
-    "scene_xshading": {"method": "xshading"},
-    "scene_exact": {"method": "exact"},
-    "scene_phong": {"method": "phong"},
-    "scene_fenney_xz": {"bump": "fenney_xz", "filter": "bilinear"},
-    "scene_fenney_polar": {"bump": "fenney_polar"},
-    "scene_angular": {"bump": "angular"},
-}
+
+
+def pipelines():
+    """One pipeline per shading method and per bump method, as the stage list has them
+    (``scene.pipeline``'s ``METHODS`` and ``BUMPS``); a bump method's texture filtered
+    bilinear where its stages take that (four banks: the memory join at its widest)."""
+    from scene.pipeline import BUMPS, METHODS, ScenePipeline
+    out = {f"scene_{m}": {"method": m} for m in METHODS}
+    for bump in BUMPS[1:]:
+        q = {"bump": bump, "filter": "bilinear"}
+        try:
+            ScenePipeline.spec(**SMALL, **q)
+        except ValueError:                   # the stage's own check: nearest only
+            q = {"bump": bump}
+        out[f"scene_{bump}"] = q
+    return out
+
+
+PIPELINES = pipelines()
 RASTER = {"screen_bits": 4, "channels": 1}
 
 MUTANTS = {       # name: (what it breaks, the property that must catch it: one-row, many)

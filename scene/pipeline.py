@@ -5,7 +5,8 @@ next by an ``amaranth.lib.stream`` (``wiring.connect``).
                            [texture -> fenney_polar]                  bump = fenney_polar
                            [texture -> bump_polar]                    bump = angular
                            [phong]                                    method = phong
-                        -> [power_table | fenney_power]               specular
+                        -> [power_table | fenney_power]               specular (and no
+                                                                      stage gives powers)
                         -> colour -> fragments (tri, x, y, depth, r, g, b)
 
 ``STAGES`` is the one place where the stages are chosen: each says itself whether a scene
@@ -38,16 +39,20 @@ from .stages.colour import Colour
 from .stages.fenney_dot import FenneyDot
 from .stages.fenney_polar import FenneyPolar
 from .stages.phong import Phong
-from .stages.power import Power
+from .stages.fenney_power import FenneyPower
+from .stages.power_table import PowerTable
 from .stages.raster import Raster
 from .stages.texel_decode import TexelDecode
 from .stages.texture import MEMORIES, Texture
 
 __all__ = ["ScenePipeline", "STAGES", "METHODS", "BUMPS", "wanted", "choose", "units_in"]
 
-STAGES = (Raster, Texture, TexelDecode, FenneyDot, FenneyPolar, BumpPolar, Phong, Power, Colour)
-METHODS = MODES + ("phong",)
-BUMPS = ("none", "fenney_xz", "fenney_polar", "angular")
+STAGES = (Raster, Texture, TexelDecode, FenneyDot, FenneyPolar, BumpPolar, Phong, PowerTable,
+          FenneyPower, Colour)
+# the shading methods: the raster's interpolation modes, and those a stage is wanted for; the
+# bump methods: those a stage is wanted for
+METHODS = MODES + tuple(dict.fromkeys(s.when["method"] for s in STAGES if "method" in s.when))
+BUMPS = ("none",) + tuple(dict.fromkeys(s.when["bump"] for s in STAGES if "bump" in s.when))
 MAX_CHANNELS = RasterUnit.RANGES["channels"][1]
 SOURCE = {"x": "_pix_x", "y": "_pix_y"}          # the fragment's pixel, as the stages carry it
 
@@ -198,14 +203,22 @@ PIPELINES[ScenePipeline.NAME] = ScenePipeline
 
 
 def wanted(q):
-    """The stages that the pipeline's parameters ``q`` call for, as they are, unchecked."""
-    return [cls(q) for cls in STAGES if cls.wanted(q)]
+    """The stages that the pipeline's parameters ``q`` call for, as they are, unchecked. A
+    stage whose values (``gives``) a stage before it already gives is left out: bump_polar
+    gives the powers from its own table, so no power stage follows it."""
+    out, given = [], set()
+    for cls in STAGES:
+        if cls.wanted(q) and not (cls.gives and set(cls.gives) <= given):
+            out.append(cls(q))
+            given |= set(cls.gives)
+    return out
 
 
 def choose(q):
     """The stages that the pipeline's parameters ``q`` call for, each validated, the raster
     joined to the channels and flat words they read. A ``ValueError`` names the scene key."""
     stages = wanted(q)
+    stages[0].given = {g for stage in stages[1:] for g in stage.gives}
     for stage in stages:
         stage.validate(q)
     channels = [c for stage in stages for c in stage.channels]

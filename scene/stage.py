@@ -3,7 +3,8 @@
 A stage subclasses :class:`Stage` and supplies
 
 - ``when`` (the parameters' values that call for it), or ``wanted(q)``: whether a scene
-  (the pipeline's parameters ``q``) calls for it;
+  (the pipeline's parameters ``q``) calls for it; ``gives``: kinds of value only one stage
+  gives (``"powers"``), so a later stage that gives them too is left out;
 - ``name``: its submodule's name in the composed top, and its unit's in ``metrics.json``;
 - ``channels``: the raster channels it reads, ``(name, mode, group)``; ``channel_bits``:
   the fraction bits it needs of some of them (``{name: bits}``; the rest keep VALUE's 14),
@@ -75,6 +76,7 @@ class Stage:
     params = {}
     why = ""
     scene_keys = {}
+    gives = ()             # kinds of value it gives that one stage gives at most ("powers")
 
     def __init__(self, q):
         self.q = q

@@ -20,6 +20,7 @@ class BumpPolar(Stage):
     name = "bump_polar"
     channels = (("phin", "linear", 0), ("thetan", "linear", 0), ("psi", "linear", 0))
     when = {"bump": "angular"}
+    gives = ("lighting", "powers")    # N.L; its own specular table: no power stage
     scene_keys = {"bump": {"rotation": ("paper", ("choice", ("paper", "exact")))}}
 
     @property

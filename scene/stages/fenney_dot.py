@@ -15,6 +15,7 @@ class FenneyDot(Stage):
     bump = True
     name = "fenney_dot"
     when = {"bump": "fenney_xz"}
+    gives = ("lighting",)           # N.L and N.H: the raster interpolates none
 
     @property
     def channels(self):

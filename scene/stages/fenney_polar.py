@@ -23,6 +23,7 @@ class FenneyPolar(Stage):
     bump = True
     name = "fenney_polar"
     when = {"bump": "fenney_polar"}
+    gives = ("lighting",)           # N.L and N.H: the raster interpolates none
 
     @property
     def flat(self):

@@ -16,6 +16,7 @@ class Phong(Stage):
     channels = tuple((f"n{a}", "linear", 0) for a in "xyz")
     why = "shading.method = phong"
     when = {"method": "phong"}
+    gives = ("lighting",)           # N.L and N.H: the raster interpolates none
 
     @property
     def params(self):

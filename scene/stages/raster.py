@@ -4,7 +4,7 @@ instantiates it and names its outputs for the stages after it (``rename``)."""
 import numpy as np
 
 from golden import raster as raster_model
-from hdl.setup_unit.formats import MODES, VALUE, parse_precision
+from hdl.setup_unit.formats import VALUE, parse_precision
 from hdl.shade_unit.formats import light_fields
 from hdl.span_unit import Raster as RasterUnit
 
@@ -15,13 +15,15 @@ class Raster(Stage):
     name = "raster"
     format_group = "raster"
 
+    given = ()            # what the stages after it give (``scene.pipeline.choose``)
+
     @property
     def channels(self):
-        """Its own: depth, and the shading method's N.L and N.H per light where no bump
-        method and no per-pixel normal computes them (seed 001)."""
+        """Its own: depth, and N.L and N.H per light interpolated by the shading method (seed
+        001), unless a stage after it gives the lighting (a bump method, phong's normal)."""
         q = self.q
         own = [("depth", "linear", 0)]
-        if q["bump"] == "none" and q["method"] in MODES:
+        if "lighting" not in self.given:
             own += [(f.name, q["method"], 0) for f in light_fields(q["lights"], q["specular"],
                                                                     "d", "s")]
         return own
