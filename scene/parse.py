@@ -136,9 +136,8 @@ def parse(data, name="scene", base=None):
         else:
             scene[key] = _table(key, data.get(key, {}), defaults[key], rules[key])
     _mesh_file(scene["mesh"], base)
-    if scene["bump"]["renormalize"] and scene["bump"]["method"] != "fenney_xz":
-        raise SceneError(f"bump.renormalize: only with bump.method = \"fenney_xz\", not "
-                         f"{scene['bump']['method']!r}")
+    for cls in pipeline.STAGES:       # a stage's keys set where it is not called for
+        cls.check_scene(scene)
     turn = scene["turntable"]
     if not any(turn["axis"]):
         raise SceneError("turntable.axis: must not be the zero vector")

@@ -33,7 +33,8 @@ and, for the scene driver (``scene/prepare.py``), which never names a stage:
 
 - ``scene_keys``: its own keys of the scene file, ``{table: {key: (default, rule)}}`` (the
   rules of ``scene/parse.py``), a table of its own or keys in a shared one;
-- ``scene_params(scene)``: the build parameters its scene keys set (a classmethod);
+- ``scene_params(scene)``: the build parameters its scene keys set, and
+  ``check_scene(scene)``: its keys' checks on any scene (classmethods);
 - ``prepare(scene, view, data)``: its data for a scene (encodings, per-triangle constants),
   given the view (``scene.prepare.view``) and the data of the stages before it; it may set
   a size the data decides in ``self.q``; ``prep["data"]`` holds them all for its models;
@@ -144,6 +145,10 @@ class Stage:
     def convert(self, ch, ideal):
         """The values it gives, its model's formats to reals (``ideal``) or back."""
         return ch
+
+    @classmethod
+    def check_scene(cls, scene):
+        """Checks of its scene keys on every scene, wanted or not (a key set for nothing)."""
 
     @classmethod
     def scene_params(cls, scene):

@@ -41,8 +41,9 @@ def design_key(name, params):
     """``(key, tag)``: what names a unit's build in a model cache, and its 8-hex digest: the
     parameters, and a scene pipeline's stages by name (the list may grow, an effect added
     to ``STAGES``, with the parameters unchanged)."""
+    from scene.pipeline import ScenePipeline
     unit = make_unit(name, spec=True, **params)
-    stages = [n for n, *_ in unit.parts()] if hasattr(unit, "parts") else None
+    stages = [s.name for s in unit.stages] if isinstance(unit, ScenePipeline) else None
     key = json.dumps([params, stages], sort_keys=True)
     return key, hashlib.sha1(key.encode()).hexdigest()[:8]
 

@@ -8,7 +8,7 @@ from hdl.illum_unit.fenney_dot import FenneyDot as Unit, dot_lanes
 from hdl.setup_unit.formats import EDGE, VALUE
 from amaranth.hdl import Cat, Const, Mux
 
-from ..stage import Stage, lane_key, raw
+from ..stage import SceneError, Stage, lane_key, raw
 
 
 class FenneyDot(Stage):
@@ -42,6 +42,12 @@ class FenneyDot(Stage):
 
     format_group = "shading"
     scene_keys = {"bump": {"renormalize": (False, ("bool",))}}
+
+    @classmethod
+    def check_scene(cls, scene):
+        if scene["bump"]["renormalize"] and scene["bump"]["method"] != cls.when["bump"]:
+            raise SceneError(f"bump.renormalize: only with bump.method = "
+                             f"\"{cls.when['bump']}\", not {scene['bump']['method']!r}")
 
     @classmethod
     def scene_params(cls, scene):

@@ -34,6 +34,7 @@ ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotat
 MEMORIES = ("external", "onchip")
 ONCHIP_MAX = 128              # texels a side of the on-chip texture RAM (the ECP5-25F's fit)
 ONCHIP_LATENCY = 1            # the RAM's read register
+ANGLES = ("sr", "polar")      # texel kinds that hold angles (golden.bump.KINDS): nearest only
 
 # The on-chip texture's side where the 128 x 128 of ONCHIP_MAX cannot fit beside the rest:
 # angular's rotation and illumination tables take 52 of the 56 DP16KD, and 32 x 32 texels of
@@ -141,10 +142,11 @@ class Texture(Stage):
                              f"(at most {ONCHIP_MAX} x {ONCHIP_MAX}, what an ECP5-25F holds "
                              f"beside the pipeline); use --texture external (the memory "
                              f"port) or a smaller map")
-        if q["bump"] in ("fenney_polar", "angular") and q["filter"] != "nearest":
+        if self.kind in ANGLES and q["filter"] != "nearest":
+            vectors = [m for m, k in bumps.KINDS.items() if k not in ANGLES]
             raise ValueError(f"bump.filter: {q['bump']} filters nearest only (its texels are "
                              f"angles, which do not interpolate across their wrap); bilinear "
-                             f"is for fenney_xz")
+                             f"is for {', '.join(vectors)}")
 
     @property
     def latency(self):
