@@ -204,11 +204,11 @@ PIPELINES[ScenePipeline.NAME] = ScenePipeline
 
 def wanted(q):
     """The stages that the pipeline's parameters ``q`` call for, as they are, unchecked. A
-    stage whose values (``gives``) a stage before it already gives is left out: bump_polar
-    gives the powers from its own table, so no power stage follows it."""
+    stage that steps aside (``defers``) where a stage before it gives the same values is left
+    out: bump_polar gives the powers from its own table, so no power stage follows it."""
     out, given = [], set()
     for cls in STAGES:
-        if cls.wanted(q) and not (cls.gives and set(cls.gives) <= given):
+        if cls.wanted(q) and not (cls.defers and set(cls.gives) <= given):
             out.append(cls(q))
             given |= set(cls.gives)
     return out

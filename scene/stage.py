@@ -4,7 +4,8 @@ A stage subclasses :class:`Stage` and supplies
 
 - ``when`` (the parameters' values that call for it), or ``wanted(q)``: whether a scene
   (the pipeline's parameters ``q``) calls for it; ``gives``: kinds of value only one stage
-  gives (``"powers"``), so a later stage that gives them too is left out;
+  gives (``"lighting"``, ``"powers"``), and ``defers``: it is left out where a stage before
+  it gives them;
 - ``name``: its submodule's name in the composed top, and its unit's in ``metrics.json``;
 - ``channels``: the raster channels it reads, ``(name, mode, group)``; ``channel_bits``:
   the fraction bits it needs of some of them (``{name: bits}``; the rest keep VALUE's 14),
@@ -78,6 +79,7 @@ class Stage:
     why = ""
     scene_keys = {}
     gives = ()             # kinds of value it gives that one stage gives at most ("powers")
+    defers = False         # left out where a stage before it gives the same
 
     def __init__(self, q):
         self.q = q

@@ -169,6 +169,7 @@ def test_xz_scene_rtl_within_bound(filter, light):
 
 
 @VERILATOR
+@pytest.mark.long          # the raster's precision: tests/test_raster_rtl.py in make test
 @pytest.mark.xdist_group("verilator-scene-xz-vector-bits")
 def test_xz_scene_with_fewer_vector_bits_within_bound():
     """``vector_bits = 8``: the raster rounds L''s components to 8 fraction bits (the patent's

@@ -119,6 +119,7 @@ def test_multiplier_knobs_keep_the_contract():
     _keeps_the_contract(unit, params, 9, 0.7, 4)
 
 
+@pytest.mark.long
 def test_more_row_multipliers_keep_the_contract():
     """More row-engine multipliers than channels + 1: the default scene's three channels
     (18 products a row) on six, a row every ceil(18 / 6) = 3 clocks, not 5, so rows shorter
@@ -133,8 +134,8 @@ def test_more_row_multipliers_keep_the_contract():
 
 @pytest.mark.parametrize("params", [
     {"channels": 3, "modes": "linear,xshading,exact", "precision": "14,8,4"},
-    {"channels": 3, "modes": "xshading,linear,xshading", "precision": "6,10,14", "row_serial": 3,
-     "setup_serial": 1}])
+    pytest.param({"channels": 3, "modes": "xshading,linear,xshading", "precision": "6,10,14",
+                  "row_serial": 3, "setup_serial": 1}, marks=pytest.mark.long)])
 def test_each_channel_keeps_its_own_precision(params):
     """``precision``: a channel rounded to p fraction bits keeps Phi, d and 2A to
     2 screen_bits + p + 6 (``Widths.fi``), so within one of its own LSBs (2**-p) of the float
@@ -162,7 +163,8 @@ def _keeps_the_contract(unit, params, rng, p_ready, seed, simulator="amaranth"):
     assert info["latency"] == unit.latency
 
 
-@pytest.mark.parametrize("mults,modes", [(3, "exact,xshading,linear"), (1, "linear,linear")])
+@pytest.mark.parametrize("mults,modes", [
+    pytest.param(3, "exact,xshading,linear", marks=pytest.mark.long), (1, "linear,linear")])
 def test_channels_in_turn_keep_the_contract(mults, modes):
     """``row_serial``: the row engine's channels one after another on one datapath (nine
     products a job, u and v again in each: ceil(9 / 3) = 3 clocks a channel on three
@@ -205,7 +207,9 @@ OVERLAPPED = [
 
 
 @pytest.mark.parametrize("simulator,params", [
-    *(pytest.param("amaranth", p, id=f"amaranth-ii{p['setup_ii']}") for p in OVERLAPPED),
+    # ii12 on Amaranth's simulator: the same as on Verilator below, in make soak
+    *(pytest.param("amaranth", p, id=f"amaranth-ii{p['setup_ii']}",
+                   marks=[pytest.mark.long] if p["setup_ii"] == 12 else []) for p in OVERLAPPED),
     *(pytest.param(c.values[0], OVERLAPPED[0], id=f"{c.id}-ii12", marks=c.marks)
       for c in per_simulator(["raster"], only=("verilator",)))])
 def test_overlapped_setup_keeps_the_contract(simulator, params):

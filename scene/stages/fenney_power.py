@@ -22,6 +22,7 @@ class FenneyPower(Stage):
     why = "shading.specular = true, shading.power = fenney (C a register)"
     when = {"specular": True, "power": "fenney"}
     gives = ("powers",)
+    defers = True                 # bump_polar gives its own
     uniforms = (Field("conc", u(8)),)
 
     def uniform_values(self, scene, L, H):

@@ -17,6 +17,7 @@ class PowerTable(Stage):
     why = "shading.specular = true, shading.power = table (loaded)"
     when = {"specular": True, "power": "table"}
     gives = ("powers",)
+    defers = True                 # bump_polar gives its own
 
     @property
     def params(self):
