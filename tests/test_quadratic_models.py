@@ -192,3 +192,16 @@ def test_torus_vector_lengths_are_near_the_seeds_figures():
     # vectors as normalised averages) stays within those, far below linear interpolation's
     assert r["quadratic"]["mean"] < 0.45 and r["quadratic"]["max"] < 3.2
     assert r["linear"]["mean"] > 10 * r["quadratic"]["mean"]
+
+
+def test_the_degree_measure_sees_flat_and_curved_meshes():
+    """flows.degree (issue 49's per-triangle degree, measured): a plane's normals are all
+    equal, so every edge constant is 0 and every X-shading term a, b, c is 0 (each triangle
+    linear); the default torus's neighbouring normals differ by 30 degrees, so none is."""
+    from flows.degree import worst_terms
+    from scene import driver as S
+    plane = S.prepare(S.parse({"mesh": {"shape": "plane", "segments": [4, 4]},
+                               "camera": {"eye": [0.0, -2.0, 3.0]}}, "plane"))
+    assert len(plane["inputs"]["x0"]) > 10 and (worst_terms(plane) == 0).all()
+    torus = worst_terms(S.prepare(S.load("scenes/default.toml")))
+    assert (torus > 2.0 ** -15).all()
