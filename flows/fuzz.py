@@ -187,9 +187,10 @@ def malformed_scene(draw, tmp):
         put(draw(st.sampled_from(wrong)))
     elif kind in ("range", "nonfinite"):
         rule = _rules()[table][key]
-        if rule[0] not in ("num", "int", "vec", "ints"):
-            kind, table, key = "range", "image", "width"
-            path, rule = "image.width", _rules()["image"]["width"]
+        if rule[0] not in ("num", "int", "vec", "ints"):     # a key of its class instead,
+            #                                                  so that every class is drawn
+            table, key = ("image", "width") if kind == "range" else ("camera", "fov_y")
+            path, rule = f"{table}.{key}", _rules()[table][key]
         if kind == "nonfinite":
             bad = draw(st.sampled_from([math.nan, math.inf, -math.inf]))
         else:

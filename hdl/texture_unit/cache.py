@@ -13,9 +13,11 @@ the order of the requests, with any latency and with backpressure on both stream
 - **Look-up** (a miss a clock): the fragment's lines are looked up in the tags (distributed
   RAM, read at once); a bank that misses takes its set's next way (round robin), its tag is
   written at once (so the next fragment hits the line on its way) and its request goes to the
-  port. When its last miss goes out (or at once, if every bank hits), the fragment, with its
-  lines' slots and which of them missed, enters the **queue** (``depth`` fragments: the
-  latency it hides). A fragment takes a clock, or one per miss.
+  port. With a port a bank, the fragment, with its lines' slots and which of them missed,
+  enters the **queue** (``depth`` fragments: the latency it hides) when its last miss goes
+  out (or at once, if every bank hits). With one port shared, it enters at once and its
+  misses go out after it, one a clock, before the next look-up: so the memory need never
+  hold more than one request before it answers. A fragment takes a clock, or one per miss.
 - **Head**: the fragment at the queue's head takes its missed lines' texels from the port, in
   order, and writes them into the data arrays (one block RAM read port and one write port per
   bank); when it has them all it reads its texels (transparent to the write of the same
@@ -66,7 +68,8 @@ def texel_cache(m, i, v, o, reqs, resps, *, banks, lines, line, ways, bank_texel
     offs = [v.pop(f"_off{k}", Const(0, 1)) for k in range(banks)]
 
     # ---- tags: a memory per bank and way, (valid, tag) per set; cleared after a reset
-    clearing, sweep = Signal(init=1), Signal(max(1, sb))
+    clearing = Signal(init=1, name="tc_clearing")
+    sweep = Signal(max(1, sb), name="tc_sweep")
     with m.If(clearing):
         m.d.sync += sweep.eq(sweep + 1)
         with m.If(sweep == sets - 1):
@@ -96,9 +99,6 @@ def texel_cache(m, i, v, o, reqs, resps, *, banks, lines, line, ways, bank_texel
             way = Mux(match[w], w, way)
         hit_way.append(way)
     remaining = Cat(*(~h for h in hit))
-    first = [Signal(name=f"tc_first{k}") for k in range(banks)]      # the lowest missing bank
-    for k in range(banks):
-        m.d.comb += first[k].eq(remaining[k] & ~(remaining[:k].any() if k else Const(0)))
     line_addr = [Cat(Const(0, lb), lnum[k], Const(k, max(1, _log2(banks))) if banks > 1
                      else Const(0, 0)) for k in range(banks)]
 
@@ -106,28 +106,45 @@ def texel_cache(m, i, v, o, reqs, resps, *, banks, lines, line, ways, bank_texel
     riding = list(v.items())
     width = sum(len(x) for _, x in riding) + banks * (slot_bits + lb + 1)
     m.submodules.tex_queue = fifo = SyncFIFOBuffered(width=width, depth=depth)
-    ready = i.valid & ~clearing
-    send = []                  # bank k's request goes out this clock
-    if shared:                 # the lowest missing bank's, one a clock
+    if shared:
+        # The fragment enters the queue at its look-up, each missing bank's tag written and
+        # its request noted (``pend``); the port sends them after, one a clock, the lowest
+        # bank first, and the look-up waits until they are out. (Sent before it entered,
+        # the fragment's requests would need a memory that takes all of them before it
+        # gives a response: with one that holds two, four misses hung. flows/texjoin.py.)
+        pend = Signal(banks, name="tc_pend")
+        pend_addr = [Signal(ADDR.width, name=f"tc_pend_addr{k}") for k in range(banks)]
+        ready = i.valid & ~clearing & ~pend.any()
+        push = ready & fifo.w_rdy
+        send = [push & remaining[k] for k in range(banks)]       # noted, sent after
+        first = [pend[k] & ~(pend[:k].any() if k else Const(0)) for k in range(banks)]
         addr = Const(0, ADDR.width)
         for k in reversed(range(banks)):
-            addr = Mux(first[k], line_addr[k], addr)
+            addr = Mux(first[k], pend_addr[k], addr)
         req = reqs[0]
-        m.d.comb += [req.valid.eq(ready & remaining.any()), req.payload.addr.eq(addr)]
-        send = [req.valid & req.ready & first[k] for k in range(banks)]
-    else:                      # every missing bank's at once, each on its own port
+        m.d.comb += [req.valid.eq(pend.any()), req.payload.addr.eq(addr)]
+        gone = Cat(*(req.ready & first[k] for k in range(banks)))
+        m.d.sync += pend.eq((pend & ~gone) | Mux(push, remaining, 0))
+        for k in range(banks):
+            with m.If(send[k]):
+                m.d.sync += pend_addr[k].eq(line_addr[k])
+        waiting = pend.any()
+    else:                      # every missing bank's at once, each on its own port; the
+        #                        fragment enters when its last one is out
+        ready = i.valid & ~clearing
+        send = []
         for k, req in enumerate(reqs):
             m.d.comb += [req.valid.eq(ready & remaining[k]), req.payload.addr.eq(line_addr[k])]
             send.append(req.valid & req.ready)
+        push = ready & fifo.w_rdy
+        for k in range(banks):
+            push = push & (~remaining[k] | send[k])
+        waiting = Const(0)
     for k, w, wr_here in issue:
         m.d.comb += wr_here.eq(send[k] & (rr[k] == w if ways > 1 else 1))
     for k in range(banks):
         with m.If(send[k]):
             m.d.sync += rr[k].eq(rr[k] + 1)
-    # the fragment enters the queue when its last miss goes out, or at once if it had none
-    push = ready & fifo.w_rdy
-    for k in range(banks):
-        push = push & (~remaining[k] | send[k])
     m.d.comb += [i.ready.eq(push), fifo.w_en.eq(push)]
     with m.If(push):
         m.d.sync += missed.eq(0)
@@ -208,5 +225,5 @@ def texel_cache(m, i, v, o, reqs, resps, *, banks, lines, line, ways, bank_texel
             m.d.sync += reg.eq(x)
         out[name] = reg
     m.d.comb += o.valid.eq(out_valid)
-    busy = i.valid | (fifo.level != 0) | out_valid | clearing
+    busy = i.valid | (fifo.level != 0) | out_valid | clearing | waiting
     return out, busy
