@@ -12,11 +12,13 @@ import pytest
 from golden import MODELS
 from hdl.units import UNITS
 
-from .conftest import assert_golden, per_simulator, stream
+from .conftest import assert_golden, long_where, per_simulator, stream
 
-# the full sweeps: texel_decode's 65,536 texels on every simulator; fenney_power's 262,144
-# inputs and fenney_polar's S x (R - Q) on Verilator, the fastest
-FULL_SWEEPS = [*per_simulator(["texel_decode"]),
+# the full sweeps: texel_decode's 65,536 texels, fenney_power's 262,144 inputs and
+# fenney_polar's S x (R - Q) on Verilator, the fastest; texel_decode's on the event-driven
+# simulators too in make soak (30 s each)
+FULL_SWEEPS = [*long_where(per_simulator(["texel_decode"]), "amaranth-texel_decode",
+                           "icarus-texel_decode"),
                *per_simulator(["fenney_power", "fenney_polar"], only=("verilator",))]
 
 
