@@ -17,7 +17,7 @@ malformed scene, naming the key) or a picture. Anything else is a traceback: a b
 scenes of a few pipeline configurations (``RTL_CONFIGS``, so the simulator models stay
 cached) also go through the RTL on the batch path: the same pixels as the model, each within
 one level (tests/test_scenes.py's bound; phong with Fenney's power and fenney_polar: each
-fragment within its candidates, ``scene.models.fenney_candidates`` and ``polar_candidates``),
+fragment within its candidates, ``scene.models.candidates``),
 and no hang (the batch harness's watchdog).
 
 npz inputs: ``python -m sim run``, ``python -m golden run`` and ``python -m sim check`` (in
@@ -329,18 +329,14 @@ def rtl_check(prep):
                           memory=memory)
     except (BatchError, StreamError) as e:
         return f"RTL: {e}"
-    q = prep["params"]
-    fenney_phong = q["method"] == "phong" and q["specular"] and q["power"] == "fenney"
-    if prep["bump"] is not None or fenney_phong:   # the same fragments, each a colour its
-        frag, ch = S.model_fragments(prep)          # bound allows
+    frag, ch = S.model_fragments(prep)
+    bound = S.candidates(prep, frag, ch)
+    if bound is not None:                     # the same fragments, each a colour its stage's
+        colours, slack = bound                # bound allows (Stage.candidates)
         if not all(np.array_equal(out[k], frag[k]) for k in ("tri", "x", "y")):
             return f"fragments differ: {len(out['x'])} from the RTL, {len(frag['x'])} model"
         rtl = np.stack([out[c] for c in "rgb"], -1)
-        if fenney_phong:                # within 1 level of a colour its X steps allow
-            far = np.abs(S.fenney_candidates(prep, frag, ch) - rtl[None]).max(-1).min(0)
-            hit = far <= 1
-        else:                           # fenney_polar: exactly one of its candidates
-            hit = (S.polar_candidates(prep, frag, ch) == rtl[None]).all(-1).any(0)
+        hit = np.abs(colours - rtl[None]).max(-1).min(0) <= slack
         return None if hit.all() else f"{int((~hit).sum())} fragments outside the bound"
     img, cov, _ = S.model(prep)
     rgb = np.stack([out[c] for c in "rgb"], -1).astype(np.uint8)

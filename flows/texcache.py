@@ -16,7 +16,19 @@ from sim.render import render
 from sim.verilog import BUILD, SCENES
 
 OUT = BUILD / "texcache"
-SCENE_NAMES = ("bump_polar", "bump_angular", "bump_xz")
+
+
+def scene_names():
+    """A scene of the gallery per bump method (its first by name): whatever reads texels."""
+    from scene.parse import load
+    out = {}
+    for path in sorted(SCENES.glob("*.toml")):
+        method = load(path).get("bump", {}).get("method", "none")
+        if method != "none":
+            out.setdefault(method, path.stem)
+    return tuple(out.values())
+
+
 # (cache_lines, cache_line, cache_ways, a port per bank)
 CACHES = ((64, 1, 2, True), (256, 1, 4, True), (64, 4, 2, True), (64, 1, 2, False))
 DEFAULT = CACHES[0]
@@ -57,7 +69,7 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="the default cache, latency 12")
     args = ap.parse_args(argv)
     from tqdm import tqdm
-    todo = [(s, size, c, lat) for s in SCENE_NAMES for size in (256, 1024)
+    todo = [(s, size, c, lat) for s in scene_names() for size in (256, 1024)
             for c in ((DEFAULT,) if args.quick else CACHES)
             for lat in ((12,) if args.quick else (12, 40))
             if c[3] or s == "bump_xz"]       # one port or four: bilinear's four banks only

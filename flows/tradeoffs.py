@@ -39,6 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
+from scene.parse import load
+from scene.pipeline import METHODS, STAGES
 from sim.cli_common import UsageError, user_errors
 from sim.jobs import run
 from sim.verilog import BUILD, SCENES
@@ -82,13 +84,19 @@ def configurations(quick=False, knobs=None):
     def unit_raster(size=None, **hw):
         return {"name": "raster", "params": raster(size, **hw)[0][1], "rows": 40}
     rows = []
-    # shading method: the default scene's pipeline, each method
-    for m in ("linear", "xshading", "exact", "phong"):
-        scene = "default" if m == "xshading" else m
+    # shading method: each method's scene (scenes/<method>.toml, or the default scene for
+    # its own), its pipeline; its accuracy measured on the stage that gives the method (phong)
+    # or on the raster
+    default = load(SCENES / "default.toml")["shading"]["method"]
+    for m in METHODS:
+        scene = "default" if m == default else m
+        if not (SCENES / f"{scene}.toml").exists():
+            continue                      # a method with no scene of its own is not swept
         parts = [[n, p] for n, p in _scene_parts(scene) if n != "texture"]
-        unit = ({"name": "phong", "params": {}, "rows": 4000} if m == "phong" else
+        owner = next((s.name for s in STAGES if s.when.get("method") == m), None)
+        unit = ({"name": owner, "params": {}, "rows": 4000} if owner else
                 {"name": "raster", "params": dict(parts[0][1]), "rows": 40})
-        rows.append(_row("shading", m, parts, scene=scene, unit=unit, default=m == "xshading"))
+        rows.append(_row("shading", m, parts, scene=scene, unit=unit, default=m == default))
     # the raster's widths, derived from the screen size (VALUE's 14 fraction bits out): the
     # default scene rendered at each size
     for bits in (6, 8, 10):

@@ -8,8 +8,8 @@ from hdl.shade_unit.formats import RGB
 
 from .framebuffer import framebuffer
 
-__all__ = ["model", "model_fragments", "run_models", "ideal", "bump_model", "polar_candidates",
-           "fenney_candidates", "shade_fragments"]
+__all__ = ["model", "model_fragments", "run_models", "ideal", "bump_model", "candidates",
+           "shade_fragments"]
 
 
 def model(prep, **bound):
@@ -67,41 +67,16 @@ def bump_model(prep, frag, ch, **bound):
                       **bound)
 
 
-def polar_candidates(prep, frag, ch):
-    """fenney_polar's bound, per fragment: every colour the RTL may give, (choices, n, 3).
-    The texel one either way along s and t (the raster's coordinates are within one LSB of
-    the model's), and each lane's intensity one either way (fenney_polar is within
-    ``golden.fenney.polar_bound``, 0.874, of the float eq 3, which the model rounds); the
-    rest is exact (tests/test_bump_scenes.py)."""
-    lanes = [("d" if t == "l" else "s") + str(k) for t, k in prep["bump"]["lanes"]]
-    out = []
-    for ds in (-1, 0, 1):
-        for dt in (-1, 0, 1):
-            for offs in np.ndindex(*(3,) * len(lanes)):
-                off = {key: o - 1 for key, o in zip(lanes, offs)}
-                c = {**ch, **bump_model(prep, frag, ch, ds=ds, dt=dt, offset=off)}
-                out.append(shade_fragments(prep, c))
-    return np.stack(out)
-
-
-def fenney_candidates(prep, frag, ch):
-    """phong with Fenney's power: every colour the RTL may give, (choices, n, 3). The power
-    takes X = floor(s / 16); phong's RTL is within its derived bound b of the float s the
-    model rounds, so where s lies within b of a multiple of 16 the RTL's X may be the next one
-    either way, and at high concentrations one step of X is up to 63/1024 of the power (C =
-    255, X 1021: 10 levels at ks 0.5 and a light of 1.3). Each light's s is tried at -b, 0
-    and +b (the ends of the interval reach every X in it); the colour is then within 1 level
-    of one of them."""
-    stages = prep["pipeline"].stages[1:]
-    phong = next(s for s in stages if s.name == "phong")
-    lights = prep["params"]["lights"]
-    b = phong.bounds(prep, ch)
-    out = []
-    for signs in np.ndindex(*(3,) * lights):
-        off = {k: (signs[k] - 1) * b[f"s{k}"] for k in range(lights)}
-        c = run_models(prep, frag, ch, stages, s_offset=off)
-        out.append(np.stack([c[x] for x in RGB], -1))
-    return np.stack(out).astype(np.int64)
+def candidates(prep, frag, ch):
+    """``(colours, slack)``: where a stage's bound is wider than a level, every colour the
+    RTL may give, ``(choices, n, 3)``, each fragment's within ``slack`` levels of one of
+    them (the last stage that gives them: ``Stage.candidates``); or None, the model's
+    colour within a level."""
+    for stage in reversed(prep["pipeline"].stages):
+        colours = stage.candidates(prep, frag, ch)
+        if colours is not None:
+            return colours, stage.slack
+    return None
 
 
 def shade_fragments(prep, ch, frag=None):

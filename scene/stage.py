@@ -171,6 +171,25 @@ class Stage:
     def memory_image(self, data):
         return None
 
+    slack = 0              # levels the RTL may be from the nearest of its candidates
+
+    @property
+    def label(self):
+        """A few words on its form for the gallery (the last bump stage's names a bump
+        pipeline there), or None."""
+        return None
+
+    def candidates(self, prep, frag, ch):
+        """Where its bound is wider than a level of the model's colour: every colour the RTL
+        may give, ``(choices, n, 3)``, each within ``slack`` levels (``scene.models
+        .candidates``). None: the model's colour, within a level."""
+        return None
+
+    def bounds(self, prep, ch):
+        """Per value it gives and fragment, how far (VALUE LSBs) the RTL may be from its
+        model; none: exact."""
+        return {}
+
     def describe(self):
         """The stage in ``metrics.json``: its unit, why, its parameters and latency."""
         return {"name": self.name, "why": self.why, "params": self.params,

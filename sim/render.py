@@ -142,7 +142,9 @@ def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=Fal
                "latency": info["latency"], "rtl_wall_s": round(wall, 3),
                "sim_px_per_s": round(n / wall, 1) if wall > 0 else None,
                "pipeline": {"params": params, "latency": pipe.latency,
-                            "registers": prep["uniforms"]},
+                            "registers": prep["uniforms"],
+                            "label": next((s.label for s in reversed(pipe.stages)
+                                           if s.bump and s.label), None)},
                "units": units,
                "rtl_vs_model": compare(rtl, cov, model, mcov),
                "rtl_vs_reference": {**{k: vs_ref[k] for k in ("psnr_db", "max_abs",
@@ -194,8 +196,7 @@ def gallery(scenes_dir=None, simulator="verilator"):
         if m["bump"] == "none":
             what = f"{m['method']}, {q['power'] if q['specular'] else 'diffuse'}"
         else:
-            what = m["bump"] + (f", {q['rotation']} rotation" if m["bump"] == "angular" else
-                                f", {q['filter']}")
+            what = f"{m['bump']}, {m['pipeline']['label']}"
         label = (f"{m['scene']}: {what}", f"{m['rtl_vs_reference']['psnr_db']} dB vs reference")
         tiles.append((Image.open(out / "rtl.png").convert("RGB"), label))
         if m["scene"] == "default":

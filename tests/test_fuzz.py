@@ -73,7 +73,7 @@ def test_phong_fenney_two_lights_within_its_derived_bound():
     its derived bound of the float s the model rounds, so where s lies that close to a
     multiple of 16 the power's X = floor(s / 16) may be the next one, and at C = 255 one X
     step is up to 63/1024 of the power. Each fragment is within 1 level of a colour that
-    those X steps allow (``scene.models.fenney_candidates``), though not always of the
+    those X steps allow (``FenneyPower.candidates``), though not always of the
     model's own: the bound this combination really has."""
     from pathlib import Path
     from flows.fuzz import rtl_check

@@ -45,6 +45,10 @@ class BumpPolar(Stage):
         return max(1, min(1024, round(scene["material"]["shininess"])))
 
     @property
+    def label(self):
+        return f"{self.q['rotation']} rotation"
+
+    @property
     def why(self):
         return f"bump.method = angular, bump.rotation = {self.q['rotation']}: rotation x 2, illum"
 

@@ -132,3 +132,20 @@ class FenneyPolar(Stage):
                         + bound.get("offset", {}).get(key, 0), 0, 255).astype(np.int64)
             ch[key] = ((i << 6) | (i >> 2)) * VALUE.lsb
         return ch
+
+    def candidates(self, prep, frag, ch):
+        """Every colour the RTL may give, ``(choices, n, 3)``, one of them exactly: the texel
+        one either way along s and t (the raster's coordinates are within one LSB of the
+        model's), and each lane's intensity one either way (fenney_polar is within
+        ``golden.fenney.polar_bound``, 0.874, of the float eq 3, which the model rounds); the
+        rest is exact (tests/test_bump_scenes.py)."""
+        from ..models import bump_model, shade_fragments
+        lanes = [("d" if t == "l" else "s") + str(k) for t, k in self.lanes]
+        out = []
+        for ds in (-1, 0, 1):
+            for dt in (-1, 0, 1):
+                for offs in np.ndindex(*(3,) * len(lanes)):
+                    off = {key: o - 1 for key, o in zip(lanes, offs)}
+                    c = {**ch, **bump_model(prep, frag, ch, ds=ds, dt=dt, offset=off)}
+                    out.append(shade_fragments(prep, c))
+        return np.stack(out)

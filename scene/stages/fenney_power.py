@@ -53,10 +53,36 @@ class FenneyPower(Stage):
 
     def model(self, prep, frag, ch, bound):
         """X = floor(s / 16) of s's raw value; ``bound``: ``s_offset`` ``{k: LSBs}`` added to
-        s_k first (``scene.models.fenney_candidates``)."""
+        s_k first (``candidates``)."""
         ch, nudge = dict(ch), bound.get("s_offset", {})
         for k in range(self.q["lights"]):
             s = raw(ch.pop(f"s{k}") + nudge.get(k, 0) * VALUE.lsb)
             ch[f"p{k}"] = fenney.power_int(np.clip(np.floor(s / 16), 0, 1023),
                                            prep["uniforms"]["conc"])
         return ch
+
+    slack = 1
+
+    def candidates(self, prep, frag, ch):
+        """Where a stage before it gives s within a derived bound b of the float s the model
+        rounds (phong's), every colour the RTL may give, ``(choices, n, 3)``, each within a
+        level. The power takes X = floor(s / 16), so where s lies within b of a multiple of
+        16 the RTL's X may be the next one either way, and at high concentrations one step
+        of X is up to 63/1024 of the power (C = 255, X 1021: 10 levels at ks 0.5 and a
+        light of 1.3). Each light's s is tried at -b, 0 and +b (the ends of the interval
+        reach every X in it). None where s is the raster's (exact to the model)."""
+        from hdl.shade_unit.formats import RGB
+        from ..models import run_models
+        stages = prep["pipeline"].stages[1:]
+        b = {}
+        for stage in stages[:stages.index(self)]:
+            b.update(stage.bounds(prep, ch))
+        lights = self.q["lights"]
+        if not all(f"s{k}" in b for k in range(lights)):
+            return None
+        out = []
+        for signs in np.ndindex(*(3,) * lights):
+            off = {k: (signs[k] - 1) * b[f"s{k}"] for k in range(lights)}
+            c = run_models(prep, frag, ch, stages, s_offset=off)
+            out.append(np.stack([c[x] for x in RGB], -1))
+        return np.stack(out).astype(np.int64)

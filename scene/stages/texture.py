@@ -79,6 +79,10 @@ class Texture(Stage):
         return ANGLE_BITS if self.kind == "polar" else 8
 
     @property
+    def label(self):
+        return self.q["filter"]
+
+    @property
     def onchip(self):
         return self.q["texture"] == "onchip"
 
