@@ -12,6 +12,7 @@ bit level on its own: tests/test_board.py). Out, in ``DIR``:
   model: the same scene's fragments (the pipeline's RTL on the batch path) through the
   framebuffer's model (``scene/framebuffer.py``), scaled and centred as the scan-out does.
 """
+import functools
 import hashlib
 import json
 import os
@@ -126,28 +127,37 @@ def simulate(core, frames, progress=True, pace=None, ratio=RATIO):
 def decode_frame(sym, timing=VGA):
     """The symbols of one frame back to the picture: (480, 640, 3), and a list of what broke
     the rules (a data character outside the active picture, a token inside it, the syncs'
-    tokens in the wrong place)."""
+    tokens in the wrong place), in scan order, stopping after the line where it passes 20.
+    Each symbol is decoded through a table of ``tmds.decode`` over all 1,024."""
     h, v = timing
-    img = np.zeros((v.active, h.active, 3), np.uint8)
+    kinds, values = _symbol_table()
+    grid = sym.reshape(v.total, h.total, 3) & 0x3FF
+    kind, value = kinds[grid], values[grid]                 # kind: 1 a token (control)
+    x, y = np.arange(h.total)[None, :], np.arange(v.total)[:, None]
+    active = (x < h.active) & (y < v.active)
+    hs = ~((h.active + h.front <= x) & (x < h.active + h.front + h.sync))
+    vs = ~((v.active + v.front <= y) & (y < v.active + v.front + v.sync))
+    want = np.stack([(vs.astype(int) << 1) | hs, np.zeros_like(x * y), np.zeros_like(x * y)],
+                    -1)
+    bad = np.where(active[..., None], kind != 0, (kind != 1) | (value != want))
+    img = np.where(kind == 0, value, 0)[:v.active, :h.active, ::-1].astype(np.uint8)
     errors = []
-    grid = sym.reshape(v.total, h.total, 3)
-    for y in range(v.total):
-        for x in range(h.total):
-            active = x < h.active and y < v.active
-            hs = not (h.active + h.front <= x < h.active + h.front + h.sync)
-            vs = not (v.active + v.front <= y < v.active + v.front + v.sync)
-            for lane in range(3):
-                kind, value = decode(grid[y, x, lane])
-                if active:
-                    if kind != "data":
-                        errors.append((x, y, lane, "a token in the picture"))
-                    else:
-                        img[y, x, 2 - lane] = value
-                elif kind != "control" or value != ((vs << 1 | hs) if lane == 0 else 0):
-                    errors.append((x, y, lane, f"blanking: {kind} {value}"))
-        if len(errors) > 20:
+    for yy, xx, lane in np.argwhere(bad):
+        if len(errors) > 20 and yy > errors[-1][1]:
             break
+        errors.append((int(xx), int(yy), int(lane), "a token in the picture"
+                       if active[yy, xx] else
+                       f"blanking: {('data', 'control')[kinds[grid[yy, xx, lane]]]} "
+                       f"{values[grid[yy, xx, lane]]}"))
     return img, errors
+
+
+@functools.lru_cache(maxsize=None)
+def _symbol_table():
+    """``tmds.decode`` of every 10-bit symbol: (kind, 1 for a token, 0 for data; value)."""
+    pairs = [decode(s) for s in range(1024)]
+    return (np.array([k == "control" for k, _ in pairs], np.int64),
+            np.array([v for _, v in pairs], np.int64))
 
 
 def run(scene_path, out_dir, size=None, board="ulx3s-25f", progress=True, frames=None,

@@ -386,13 +386,14 @@ def _bad_then_good(enc, prep):
 
 @pytest.mark.skipif(available("verilator") is not None, reason="needs Verilator")
 def test_a_small_scene_through_the_board_core_decodes_to_the_model(tmp_path):
-    """The default torus at 32 x 32 through the link (with every kind of bad input before
+    """The default torus at 64 x 64 (the pipeline's model test_scenes.py builds) through
+    the link (with every kind of bad input before
     its triangles), the pipeline, the framebuffer and the scan-out on Verilator: one whole
     frame's symbols keep DVI's rules in the blanking and decode to the model's framebuffer
     (the pipeline's fragments through scene/framebuffer.py, scaled by 15 and centred)
     exactly; every bad input counted once."""
     from board.sim import run
-    r = run(SCENES / "default.toml", tmp_path, size=(32, 32), progress=False,
+    r = run(SCENES / "default.toml", tmp_path, size=(64, 64), progress=False,
             frames=_bad_then_good, fast=True)
     assert r["symbol_errors"] == [] and r["pixels_differ"] == 0, r
     counts = r["replies"]

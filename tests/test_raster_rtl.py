@@ -138,8 +138,9 @@ def test_more_row_multipliers_keep_the_contract():
     _keeps_the_contract(unit, params, 10, 0.7, 5)
 
 
-@pytest.mark.parametrize("params", [
-    {"channels": 3, "modes": "linear,xshading,exact", "precision": "14,8,4"},
+@pytest.mark.parametrize("params", [                 # a tradeoffs knob: make soak
+    pytest.param({"channels": 3, "modes": "linear,xshading,exact", "precision": "14,8,4"},
+                 marks=pytest.mark.long),
     pytest.param({"channels": 3, "modes": "xshading,linear,xshading", "precision": "6,10,14",
                   "row_serial": 3, "setup_serial": 1}, marks=pytest.mark.long)])
 def test_each_channel_keeps_its_own_precision(params):
@@ -217,7 +218,8 @@ OVERLAPPED = [
     # retires) in make soak
     *(pytest.param("amaranth", p, id=f"amaranth-ii{p['setup_ii']}", marks=pytest.mark.long)
       for p in OVERLAPPED),
-    *(pytest.param(c.values[0], OVERLAPPED[0], id=f"{c.id}-ii12", marks=c.marks)
+    *(pytest.param(c.values[0], OVERLAPPED[0], id=f"{c.id}-ii12",
+                   marks=[*c.marks, pytest.mark.long])       # issue 49's knobs: make soak
       for c in per_simulator(["raster"], only=("verilator",)))])
 def test_overlapped_setup_keeps_the_contract(simulator, params):
     """The setup overlapping triangles: one every 12 clocks on four wide multipliers and

@@ -39,10 +39,15 @@ def test_every_unit_is_covered():
 # test_simulators_agree holds every unit's Icarus rows to Amaranth's, bit for bit.
 ICARUS_SOAK = [p.id for p in per_simulator(CONFIGS, only=("icarus",))
                if p.values[1] not in ("texel_decode", "rotation")]
+# On Verilator, each unit's variants (a model each to build, 10-30 s) in make soak; Amaranth
+# runs them in make test. rotation's exact form stays: tests/test_rotation_rtl.py builds it.
+VARIANTS_SOAK = [p.id for p in per_simulator(CONFIGS, only=("verilator",))
+                 if p.values[2] and p.values[2] != {"method": "exact"}
+                 and sum(n == p.values[1] for n, _ in CONFIGS) > 1]
 
 
 @pytest.mark.parametrize("simulator,name,params", long_where(per_simulator(CONFIGS),
-                                                            *ICARUS_SOAK))
+                                                            *ICARUS_SOAK, *VARIANTS_SOAK))
 def test_backpressure(simulator, name, params):
     """Hard cases then random rows, with random valid gaps (30 %) and ready stalls (40 %):
     every output within its bound, none lost, repeated or reordered (rows compare 1:1). The
@@ -56,8 +61,8 @@ def test_backpressure(simulator, name, params):
     assert_golden(name, inputs, out, params)
 
 
-@pytest.mark.parametrize("simulator,name,params", list(per_simulator(
-    CONFIGS, only=("amaranth", "verilator"))))
+@pytest.mark.parametrize("simulator,name,params", long_where(per_simulator(
+    CONFIGS, only=("amaranth", "verilator")), *VARIANTS_SOAK))
 def test_one_per_clock(simulator, name, params):
     """With valid and ready held high, n rows take n + latency cycles, and the first output
     appears exactly ``latency`` cycles after the first input. (On Icarus:
