@@ -32,8 +32,9 @@ def test_full_sweep(simulator, name):
 @pytest.mark.parametrize("simulator,name", list(per_simulator(["fenney_power"],
                                                             only=("amaranth", "icarus"))))
 def test_power_random_subset(simulator, name):
-    """The power unit's random subset on the paths that do not sweep all 262,144 inputs."""
-    inputs = MODELS["fenney_power"].vectors(np.random.default_rng(5), 40_000)
+    """The power unit's random subset on the paths that do not sweep all 262,144 inputs
+    (Verilator sweeps them; here the hard cases come first, then random rows)."""
+    inputs = MODELS["fenney_power"].vectors(np.random.default_rng(5), 10_000)
     out, _ = stream("fenney_power", inputs, simulator)
     assert_golden("fenney_power", inputs, out)
 
