@@ -94,11 +94,11 @@ def test_the_1024_screen_longest_spans_and_steepest_curvature():
     assert np.bincount(rows).max() == 1024                    # spans across the whole screen
 
 
-@pytest.mark.parametrize("params", [
-    {"modes": "exact,linear"},
-    # the reciprocal's forms, tradeoffs' knobs, each a model of its own: make soak
-    pytest.param({"recip": "divide"}, marks=pytest.mark.long),
-    pytest.param({"modes": "linear,xshading", "recip_iters": 2}, marks=pytest.mark.long)])
+# in make soak: the exact mode is in make test in test_edge_constant_groups and the 1024
+# screen; the reciprocal's forms are tradeoffs' knobs
+@pytest.mark.long
+@pytest.mark.parametrize("params", [{"modes": "exact,linear"}, {"recip": "divide"},
+                                    {"modes": "linear,xshading", "recip_iters": 2}])
 def test_modes_and_reciprocals_on_amaranth(params):
     p = make_unit("raster", spec=True, **SMALL, **params).params
     hard, _ = raster_hard_cases(**p)

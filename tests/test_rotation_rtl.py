@@ -91,7 +91,7 @@ def test_hard_cases(simulator, name):
     assert out["theta"][6] <= bound[6]                # A = N: theta' = 0 within the bound
 
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=10, deadline=None)
 @given(st.lists(st.tuples(st.integers(0, FULL - 1), st.integers(0, HALF),
                           st.integers(0, FULL - 1), st.integers(0, HALF)),
                 min_size=1, max_size=40))
