@@ -18,10 +18,17 @@ def to_vector(phi, theta):
                     axis=-1)
 
 
+def wrap(angle):
+    """``angle`` modulo 2 pi into [0, 2 pi): ``np.mod`` of a tiny negative angle rounds to
+    2 pi itself, which is 0."""
+    w = np.mod(angle, 2 * np.pi)
+    return np.where(w >= 2 * np.pi, 0.0, w)
+
+
 def to_polar(v):
     """(phi in [0, 2 pi), theta in [0, pi]) of vectors (..., 3); phi = 0 on the z axis."""
     v = np.asarray(v, float)
-    phi = np.mod(np.arctan2(v[..., 1], v[..., 0]), 2 * np.pi)
+    phi = wrap(np.arctan2(v[..., 1], v[..., 0]))
     theta = np.arccos(np.clip(v[..., 2] / np.linalg.norm(v, axis=-1), -1.0, 1.0))
     return phi, theta
 
@@ -66,7 +73,7 @@ def rotate_paper(phi_n, theta_n, phi_a, theta_a):
     theta_x = np.arcsin(np.clip((np.sin(x) + np.sin(y)) / 2, -1.0, 1.0))
     z = np.angle(np.exp(1j * (theta_x - theta_n)))          # Z, wrapped into (-pi, pi]
     num = (np.cos(y) - np.cos(x)) / 2                       # sin theta_A sin D
-    phi = np.mod(np.arctan2(num, np.sin(z)), 2 * np.pi)
+    phi = wrap(np.arctan2(num, np.sin(z)))
     cos_z = np.abs(np.cos(z))
     yk = np.where(cos_z > 0, np.abs(num) / np.where(cos_z > 0, cos_z, 1.0), 1.0)
     prop = 1.0 - np.arccos(np.minimum(yk, 1.0)) / HALF_PI

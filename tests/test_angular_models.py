@@ -4,7 +4,7 @@ The exact rotation is held to geometry; the published method to the equations wo
 to exactness where the method is exact (D = 0 or 180 deg, theta_A = 0), and to finite, in-range
 results on every hard case it leaves open."""
 import numpy as np
-from hypothesis import given, strategies as st
+from hypothesis import example, given, strategies as st
 
 from golden import angular as rot
 
@@ -80,6 +80,7 @@ polar = st.floats(0, np.pi, allow_nan=False)
 
 
 @given(angles, polar, angles, polar)
+@example(2.220446049250313e-16, 0.0, 0.0, 1.0)     # phi' was 2 pi itself (np.mod of -tiny)
 def test_paper_method_always_finite_and_in_range(phi_n, theta_n, phi_a, theta_a):
     p, t = rot.rotate_paper(phi_n, theta_n, phi_a, theta_a)
     assert np.isfinite(p) and np.isfinite(t)
