@@ -14,8 +14,10 @@ os.environ.setdefault("SHADE_BATCH_OPT", "-O0")
 from hypothesis import HealthCheck, settings
 
 # Property tests check values, not speed: no per-example deadline, and no health check that
-# times example generation, on a loaded CI machine.
-settings.register_profile("shading", deadline=None,
+# times example generation, on a loaded CI machine. The same examples on every run
+# (derandomize), so that make test gives one answer for one commit; make fuzz explores (a
+# fresh clone's random draw found phi' = 2 pi once: tests/test_angular_models.py keeps it).
+settings.register_profile("shading", deadline=None, derandomize=True,
                           suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("shading")
 
