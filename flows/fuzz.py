@@ -44,27 +44,48 @@ import tomli_w
 from hypothesis import HealthCheck, given, seed as hseed, settings, strategies as st
 
 from scene import driver as S
-from scene.pipeline import BUMPS, METHODS
+from scene.pipeline import BUMPS, METHODS, POWERS, STAGES, ScenePipeline
 
 from sim.verilog import BUILD
 
 OUT = BUILD / "fuzz"
 CLEAR = None        # the exception types ``sim.cli_common.user_errors`` reports in one line
 
-# pipeline configurations whose scenes also run through the RTL (their data varies freely:
-# it is loaded at run time, so each is one model)
-RTL_CONFIGS = {
-    "xshading": {"shading": {"method": "xshading", "specular": True, "power": "table"}},
-    "phong_fenney_2": {"shading": {"method": "phong", "specular": True, "power": "fenney"},
-                       "lights": 2},
-    "linear_diffuse": {"shading": {"method": "linear", "specular": False, "power": "table"}},
-    "exact_2": {"shading": {"method": "exact", "specular": True, "power": "table"},
-                "lights": 2},
-    # the bump method that hung on dense meshes (issue 27); a map of 64 as tests/ use
-    "fenney_polar": {"shading": {"method": "xshading", "specular": True, "power": "table"},
-                     "bump": {"method": "fenney_polar", "size": 64}},
-}
 RTL_SIZE = 64
+
+
+def _rtl_configs():
+    """The pipeline configurations whose scenes also run through the RTL (their data varies
+    freely: it is loaded at run time, so each is one model), read from the stages: each
+    shading method and each bump method once, so that every stage and every raster mode is
+    in one. The k-th shading method takes the power kinds in turn, one light and two in turn
+    (one where its stages shade only one), and every third is diffuse only; a bump method
+    takes the defaults and a map of 64 (as tests/ use: their models are shared)."""
+    out = {}
+    for k, m in enumerate(METHODS):
+        c = {"shading": {"method": m, "specular": k % 3 != 2, "power": POWERS[k % len(POWERS)]},
+             "lights": 1 + k % 2}
+        out[m] = c if _valid(c) else {**c, "lights": 1}
+    for b in BUMPS[1:]:
+        out[b] = {"shading": dict(S.DEFAULTS["shading"]), "bump": {"method": b, "size": 64}}
+    return out
+
+
+def _config_scene(c):
+    return {"image": {"width": RTL_SIZE, "height": RTL_SIZE}, "shading": c["shading"],
+            "lights": [S.DEFAULTS["lights"][0]] * c.get("lights", 1),
+            **({"bump": c["bump"]} if "bump" in c else {})}
+
+
+def _valid(c):
+    try:
+        S.parse(_config_scene(c), "config")
+    except S.SceneError:
+        return False
+    return True
+
+
+RTL_CONFIGS = _rtl_configs()
 
 
 def _clear_errors():
@@ -109,15 +130,15 @@ def valid_scene(draw, config=None):
     d["lights"] = [{"to_light": draw(vec3(-1, 1).filter(lambda v: any(v))),
                     "color": draw(vec3(0, 2))} for _ in range(n)]
     d["shading"] = {"method": draw(st.sampled_from(METHODS)), "specular": draw(st.booleans()),
-                    "power": draw(st.sampled_from(["table", "fenney"]))}
+                    "power": draw(st.sampled_from(POWERS))}
     bump = draw(st.sampled_from(BUMPS + ("none", "none", "none")))
     if bump != "none":
         d["bump"] = {"method": bump, "map": draw(st.sampled_from(["flat", "bricks", "dimples"])),
                      "size": draw(st.sampled_from([16, 32, 64, 128])),
-                     "filter": "bilinear" if bump == "fenney_xz" and draw(st.booleans())
-                     else "nearest",
-                     "rotation": draw(st.sampled_from(["paper", "exact"])),
                      "depth": draw(st.sampled_from([0.0, 0.5, 1.0, 8.0]))}
+        for key, options in _bump_choices(bump).items():     # its stages' own (the filter,
+            d["bump"][key] = draw(st.sampled_from(options))  # the rotation; a filter that
+            #                                                  its texels refuse: an error)
     if config:                                  # an RTL configuration: its effects, our data
         c = RTL_CONFIGS[config]
         d["shading"] = dict(c["shading"])
@@ -131,6 +152,17 @@ def valid_scene(draw, config=None):
                                                                     "dimples"])),
                          "depth": draw(st.sampled_from([0.0, 0.5, 1.0, 8.0]))}
     return d
+
+
+def _bump_choices(bump):
+    """[bump]'s keys that the stages wanted for the bump method ``bump`` give a choice or a
+    switch: ``{key: options}``."""
+    out, q = {}, {**ScenePipeline.PARAMS, "bump": bump}
+    for cls in (cls for cls in STAGES if cls.wanted(q)):
+        for key, (_, rule) in cls.scene_keys.get("bump", {}).items():
+            if rule[0] in ("choice", "bool"):
+                out[key] = rule[1] if rule[0] == "choice" else (False, True)
+    return out
 
 
 # every key by table: a value of another type, and values out of range
@@ -329,26 +361,11 @@ def rtl_check(prep):
                           memory=memory)
     except (BatchError, StreamError) as e:
         return f"RTL: {e}"
-    frag, ch = S.model_fragments(prep)
-    bound = S.candidates(prep, frag, ch)
-    if bound is not None:                     # the same fragments, each a colour its stage's
-        colours, slack = bound                # bound allows (Stage.candidates)
-        if not all(np.array_equal(out[k], frag[k]) for k in ("tri", "x", "y")):
-            return f"fragments differ: {len(out['x'])} from the RTL, {len(frag['x'])} model"
-        rtl = np.stack([out[c] for c in "rgb"], -1)
-        hit = np.abs(colours - rtl[None]).max(-1).min(0) <= slack
-        return None if hit.all() else f"{int((~hit).sum())} fragments outside the bound"
-    img, cov, _ = S.model(prep)
-    rgb = np.stack([out[c] for c in "rgb"], -1).astype(np.uint8)
-    rtl, rcov = S.framebuffer(prep["size"], out["x"], out["y"], out["depth"], rgb,
-                              prep["scene"]["image"]["background"])
-    if (rcov != cov).any():
-        return f"coverage differs on {int((rcov != cov).sum())} pixels"
-    diff = np.abs(rtl.astype(int) - img.astype(int))[cov]
-    if diff.size and diff.max() > 1:
-        return f"{int((diff.max(-1) > 1).sum())} pixels more than 1 level from the model " \
-               f"(up to {int(diff.max())})"
-    return None
+    frag, ch = S.model_fragments(prep)          # the same fragments, in the same order, each
+    if not all(np.array_equal(out[k], frag[k]) for k in ("tri", "x", "y")):   # a colour its
+        return f"fragments differ: {len(out['x'])} from the RTL, {len(frag['x'])} model"
+    hit = S.within(prep, frag, ch, np.stack([out[c] for c in "rgb"], -1))   # stages' bounds
+    return None if hit.all() else f"{int((~hit).sum())} fragments outside the bound"
 
 
 def fuzz_scenes(n, seed, tmp, rtl=0, log=None, detail=None, configs=None):
@@ -607,11 +624,7 @@ def main(argv=None):
 
 def _config_params(config):
     """The pipeline parameters of an RTL configuration (its model's key)."""
-    data = {"image": {"width": RTL_SIZE, "height": RTL_SIZE},
-            "shading": RTL_CONFIGS[config]["shading"],
-            "lights": [S.DEFAULTS["lights"][0]] * RTL_CONFIGS[config].get("lights", 1),
-            **({"bump": RTL_CONFIGS[config]["bump"]} if "bump" in RTL_CONFIGS[config] else {})}
-    return S.pipeline_params(S.parse(data, "config"))
+    return S.pipeline_params(S.parse(_config_scene(RTL_CONFIGS[config]), "config"))
 
 
 if __name__ == "__main__":

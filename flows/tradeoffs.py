@@ -31,6 +31,7 @@ Writes ``build/tradeoffs/tradeoffs.json``, ``report.md`` and the Pareto plots.
 """
 import argparse
 import fcntl
+import functools
 import hashlib
 import json
 import time
@@ -48,7 +49,6 @@ from sim.verilog import BUILD, SCENES
 OUT = BUILD / "tradeoffs"
 FLOW = "tradeoffs-2"          # bump when a measurement changes: the row cache's key has it
 ECP5_25F = {"LUT4": 24288, "FF": 24288, "MULT18X18D": 28, "DP16KD": 56}
-SHININESS = 32.0              # the default material's: what the power rows are measured at
 
 
 # ---- the sweep -------------------------------------------------------------------------------
@@ -57,6 +57,18 @@ def _row(knob, setting, design, *, scene=None, hardware=None, size=None, unit=No
          default=False):
     return {"knob": knob, "setting": setting, "default": default, "design": design,
             "scene": scene, "hardware": hardware or {}, "size": size, "unit": unit}
+
+
+def _sweep_row(sw):
+    """A stage's row (``scene.stage.Sweep``): its design, the unit alone, the scene's raster or
+    its whole pipeline."""
+    design = ([[sw.unit, sw.params]] if sw.build == "unit" else
+              [_scene_parts(sw.scene, sw.hardware)[0]] if sw.build == "raster" else
+              [["scene", _scene_params(sw.scene, sw.hardware)]])
+    unit = None if sw.rows is False else {"name": sw.unit, "params": sw.params,
+                                          "rows": sw.rows}
+    return _row(sw.knob, sw.setting, design, scene=sw.scene, hardware=sw.hardware, unit=unit,
+                default=sw.default)
 
 
 def _scene_params(scene, hardware=None, size=None):
@@ -141,55 +153,11 @@ def configurations(quick=False, knobs=None):
         hw = {"row_serial": 3, "setup_serial": n}
         rows.append(_row("setup channels", f"in turn, {n} multiplier{'s' * (n > 1)} (row 3)",
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw)))
-    # a channel's precision: fenney_xz's vector channels (six of its nine) rounded to fewer
-    # fraction bits, their Phi, d and 2A kept that much shorter (the patent's s8 takes 7)
-    for bits in (14, 10, 8):
-        hw = {"vector_bits": bits}
-        rows.append(_row("vector bits", str(bits), [_scene_parts("bump_xz", hw)[0]],
-                         scene="bump_xz", hardware=hw, default=bits == 14))
-    # the rotation: method (the exact one's CORDIC iterations), angle bits, table address bits
-    for label, p, scene in (("paper", {}, "bump_angular"),
-                            ("exact", {"method": "exact"}, "bump_angular_exact"),
-                            ("exact, 12 iterations", {"method": "exact", "iterations": 12},
-                             None),
-                            ("10-bit angles", {"angle_bits": 10, "trig_bits": 12,
-                                               "asin_bits": 10}, None),
-                            ("tables -2 bits", {"asin_bits": 10, "atan_bits": 6,
-                                                "prop_bits": 10}, None)):
-        rows.append(_row("rotation", label, [["rotation", p]], scene=scene,
-                         unit={"name": "rotation", "params": p, "rows": 20000},
-                         default=not p))
-    # Fenney's dot product: plain, or renormalised by a table of rsqrt_bits
-    for label, p in (("plain", {}), ("renorm 8", {"normalize": True, "rsqrt_bits": 8}),
-                     ("renorm 12", {"normalize": True, "rsqrt_bits": 12})):
-        rows.append(_row("fenney_dot", label, [["fenney_dot", p]], scene="bump_xz", hardware=p,
-                         unit={"name": "fenney_dot", "params": p, "rows": 20000},
-                         default=not p))
-    # the power: the patent's approximation, or a table of mant_bits
-    for label, name, p, hw in (("fenney", "fenney_power", {}, {"power": "fenney"}),
-                               ("table 4", "power_table", {"mant_bits": 4}, {"mant_bits": 4}),
-                               ("table 6", "power_table", {}, {}),
-                               ("table 8", "power_table", {"mant_bits": 8}, {"mant_bits": 8})):
-        scene = "fenney_power" if name == "fenney_power" else "default"
-        hw = {k: v for k, v in hw.items() if k != "power"}
-        rows.append(_row("power", label, [[name, p]], scene=scene, hardware=hw,
-                         unit={"name": name, "params": p, "rows": None},
-                         default=label == "table 6"))
-    # the bump filter: the whole fenney_xz pipeline (the texture is not a unit of its own)
-    for f in ("nearest", "bilinear"):
-        rows.append(_row("filter", f, [["scene", _scene_params("bump_xz", {"filter": f})]],
-                         scene="bump_xz", hardware={"filter": f}, default=f == "bilinear"))
-    # Fenney's first embodiment (its other bump methods are the fenney_dot and rotation rows)
-    rows.append(_row("bump method", "fenney_polar", [["fenney_polar", {}]], scene="bump_polar",
-                     default=True))
-    # seed 003's comparison: the Cartesian baseline (Peercy) beside the angular pipeline
-    rows.append(_row("bump architecture", "Cartesian (Peercy)", [["peercy", {}]],
-                     unit={"name": "peercy", "params": {}, "rows": 20000}))
-    rows.append(_row("bump architecture", "angular (seed 003)", [["bump_polar", {}]],
-                     default=True))
+    # each stage's own rows (Stage.sweeps): its units' settings, in the stages' order
+    sweeps = [sw for cls in STAGES for sw in cls.sweeps()]
     if quick:       # no raster: a few minutes
-        rows = [r for r in rows if r["knob"] in ("power", "fenney_dot")
-                and r["setting"] in ("fenney", "table 6", "plain", "renorm 12")]
+        sweeps, rows = [sw for sw in sweeps if sw.quick], []
+    rows += [_sweep_row(sw) for sw in sweeps]
     if knobs:
         rows = [r for r in rows if r["knob"] in knobs]
     return rows
@@ -282,41 +250,6 @@ def _image(cfg, simulator, key):
             "render_wall_s": m["rtl_wall_s"], "size": m["size"]}
 
 
-def _exact_error(name, params, inputs, out):
-    """``(|RTL - exact function|, what the unit is)`` per row."""
-    from golden import MODELS, angular
-    if name in ("raster", "phong", "peercy"):        # float models: the exact function
-        errs = MODELS[name].check(inputs, out, **params)
-        return np.concatenate([e for e, _ in errs.values()]), "LSB of VALUE (2^-14)"
-    if name == "power_table":
-        n = params.get("shininess", SHININESS)
-        s = np.clip(np.asarray(inputs["s"]) / 2.0 ** 14, 0, 1)
-        return np.abs(out["p"] - s ** n * 1024), "LSB of 1/1024"
-    if name == "fenney_power":
-        x = np.asarray(inputs["x"]) / 1024.0
-        return np.abs(out["p"] - x ** SHININESS * 1024), \
-            f"LSB of 1/1024, against x^{SHININESS:g} (C = {int(inputs['c'][0])})"
-    if name == "fenney_dot":            # decoded texels (|x| + |y| + |z| = 255), lights
-        b = np.stack([inputs[k] for k in "xyz"]).astype(float)
-        lv = np.stack([inputs[f"l{k}"] for k in "xyz"]).astype(float)
-        ok = (np.abs(b).sum(0) == 255) & (np.abs(lv).sum(0) > 0)
-        b, lv, out = b[:, ok], lv[:, ok], {"x": np.asarray(out["x"])[ok]}
-        inputs = {"h": np.asarray(inputs["h"])[ok]}
-        cos = (b * lv).sum(0) / (np.linalg.norm(b, axis=0) * 127)
-        h = np.asarray(inputs["h"]) / 255.0
-        return np.abs(out["x"] - np.clip(1024 * ((1 - h) + h * cos), 0, 1023)), \
-            "LSB of X (1/1024), against b/|b| . l/127 (the light as given)"
-    if name == "rotation":
-        bits = params.get("angle_bits", 12)
-        want = angular.rotation_float(inputs, angle_bits=bits, method="exact")
-        t = lambda a: np.asarray(a, float) * 2 * np.pi / 2 ** bits
-        got = angular.to_vector(t(out["phi"]), t(out["theta"]))
-        ref = angular.to_vector(t(want["phi"]), t(want["theta"]))
-        cos = np.clip((got * ref).sum(-1), -1, 1)
-        return np.degrees(np.arccos(cos)), "degrees between the rotated vector and the exact one"
-    raise KeyError(name)
-
-
 def _build(name, params, simulator):
     if simulator == "verilator":
         from sim.batch import build
@@ -327,30 +260,25 @@ def _build(name, params, simulator):
 
 
 def _unit_error(unit, simulator):
-    from golden import MODELS, TYPICAL_SIZE, random_triangles
+    from golden import MODELS
     from sim.run import simulate
     name, params, n = unit["name"], unit["params"], unit["rows"]
-    rng = np.random.default_rng(11)
-    if name == "raster":
-        inputs = random_triangles(rng, n, **params, size=TYPICAL_SIZE)
-    elif name == "fenney_power":         # every X at the default material's concentration
-        from golden.fenney import concentration_for
-        inputs = {"x": np.arange(1024), "c": np.full(1024, concentration_for(SHININESS))}
-    else:
-        inputs = MODELS[name].vectors(rng, n, **params)
+    model = MODELS[name]
+    inputs = model.exact_vectors(np.random.default_rng(11), n, **params)
     with _lock("build", name, params):
         _build(name, params, simulator)
     t0 = time.perf_counter()
     out, _ = simulate(name, params, inputs, simulator)
-    within = all(bool(np.all(e <= b)) for e, b in MODELS[name].check(inputs, out, **params)
-                 .values())
+    within = all(bool(np.all(e <= b)) for e, b in model.check(inputs, out, **params).values())
     wall = time.perf_counter() - t0
-    err, what = _exact_error(name, params, inputs, out)
-    return {"unit_err_max": round(float(err.max()), 4),
+    row = {"unit_within_bound": within, "unit_test_wall_s": round(wall, 3)}
+    if model.against_exact is None:       # a unit with no exact function to price against
+        return row
+    err, what = model.against_exact(inputs, out, **params)
+    return {**row, "unit_err_max": round(float(err.max()), 4),
             "unit_err_p99": round(float(np.percentile(err, 99)), 4),
             "unit_err_mean": round(float(err.mean()), 4), "unit_err_in": what,
-            "unit_rows": len(err), "unit_within_bound": within,
-            "unit_test_wall_s": round(wall, 3)}
+            "unit_rows": len(err)}
 
 
 def _fits(row):
@@ -411,7 +339,14 @@ def sweep(cfgs, opts, jobs=2, dask=None, quiet=False):
 # ---- the report ------------------------------------------------------------------------------
 
 DSP_LUT4 = 24288 // 28        # a MULT18X18D counted as the 25F's LUT4 per DSP in the plots
-SHADING_SCENES = {"default", "linear", "exact", "phong", "fenney_power"}
+
+
+@functools.lru_cache(None)
+def _default_geometry(scene):
+    """Whether a scene shows the default scene's surface: its mesh, camera, image, material
+    and bump (the plots compare PSNR on one picture; the shading may differ)."""
+    view = lambda sc: [sc[k] for k in ("mesh", "camera", "image", "material", "bump")]
+    return view(load(SCENES / f"{scene}.toml")) == view(load(SCENES / "default.toml"))
 
 
 def _cost(r):
@@ -467,7 +402,8 @@ def plots(rows, out):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    pts = [r for r in rows if r.get("psnr_db") is not None and r["scene"] in SHADING_SCENES
+    pts = [r for r in rows if r.get("psnr_db") is not None and r["scene"]
+           and _default_geometry(r["scene"])
            and r.get("size") == [256, 256]]
     axes = [("cost", f"LUT4 + {DSP_LUT4} x MULT18X18D (ECP5-25F)", _cost),
             ("ns_per_pixel", "ns per pixel (cycles per fragment / Fmax)",

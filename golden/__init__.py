@@ -9,7 +9,10 @@
   (exhaustive where the input space allows);
 - ``check(inputs, outputs, **params)``: ``{field: (error, bound)}`` per row, where ``error`` is
   ``|RTL - model|`` (or the distance to the set of allowed values) and ``bound`` the derived
-  limit (0 for bit-exact fields).
+  limit (0 for bit-exact fields);
+- ``against_exact(inputs, outputs, **params)``: ``(error, what)``, the RTL's distance per row
+  from the *exact* function the unit approximates (``make tradeoffs``' unit error), and
+  ``exact_vectors(rng, n, **params)``: the rows it is measured on (by default ``vectors``).
 """
 from dataclasses import dataclass
 from typing import Callable
@@ -31,10 +34,15 @@ class Model:
     check: Callable
     exact: bool              # every output bit-exact
     typical: int = 5000      # rows (triangles for raster) that make sim streams by default
+    against_exact: Callable = None
+    make_exact_vectors: Callable = None
 
     def vectors(self, rng, n, **params):
         out = self.make_vectors(rng, n, **params)
         return out if n is None else {k: np.asarray(v)[:n] for k, v in out.items()}
+
+    def exact_vectors(self, rng, n, **params):
+        return (self.make_exact_vectors or self.vectors)(rng, n, **params)
 
 
 def _grid(*axes):
@@ -422,24 +430,82 @@ def raster_bounds(channels, precision="14"):
             for p in parse_precision(precision, channels)]
 
 
+# ---- against the exact functions (make tradeoffs) ---------------------------------------------
+
+SHININESS = 32.0     # the scene contract's default material: where the powers are measured
+
+
+def _float_exact(name):
+    """A float model is the exact function: its own check's error."""
+    def err(inputs, outputs, **params):
+        errs = MODELS[name].check(inputs, outputs, **params)
+        return np.concatenate([e for e, _ in errs.values()]), "LSB of VALUE (2^-14)"
+    return err
+
+
+def _power_table_exact(inputs, outputs, **params):
+    n = params.get("shininess", SHININESS)
+    s = np.clip(np.asarray(inputs["s"]) / 2.0 ** 14, 0, 1)
+    return np.abs(outputs["p"] - s ** n * 1024), "LSB of 1/1024"
+
+
+def _fenney_power_exact(inputs, outputs, **_):
+    x = np.asarray(inputs["x"]) / 1024.0
+    return (np.abs(outputs["p"] - x ** SHININESS * 1024),
+            f"LSB of 1/1024, against x^{SHININESS:g} (C = {int(inputs['c'][0])})")
+
+
+def _fenney_power_exact_vectors(rng, n, **_):
+    """Every X at the default material's concentration."""
+    return {"x": np.arange(1024), "c": np.full(1024, fenney.concentration_for(SHININESS))}
+
+
+def _dot_exact(inputs, outputs, **_):
+    """Decoded texels (|x| + |y| + |z| = 255) and lights: against b/|b| . l/127."""
+    b = np.stack([inputs[k] for k in "xyz"]).astype(float)
+    lv = np.stack([inputs[f"l{k}"] for k in "xyz"]).astype(float)
+    ok = (np.abs(b).sum(0) == 255) & (np.abs(lv).sum(0) > 0)
+    b, lv, x = b[:, ok], lv[:, ok], np.asarray(outputs["x"])[ok]
+    cos = (b * lv).sum(0) / (np.linalg.norm(b, axis=0) * 127)
+    h = np.asarray(inputs["h"])[ok] / 255.0
+    return (np.abs(x - np.clip(1024 * ((1 - h) + h * cos), 0, 1023)),
+            "LSB of X (1/1024), against b/|b| . l/127 (the light as given)")
+
+
+def _rotation_exact(inputs, outputs, **params):
+    bits = params.get("angle_bits", 12)
+    want = angular.rotation_float(inputs, angle_bits=bits, method="exact")
+    t = lambda a: np.asarray(a, float) * 2 * np.pi / 2 ** bits
+    got = angular.to_vector(t(outputs["phi"]), t(outputs["theta"]))
+    ref = angular.to_vector(t(want["phi"]), t(want["theta"]))
+    cos = np.clip((got * ref).sum(-1), -1, 1)
+    return np.degrees(np.arccos(cos)), "degrees between the rotated vector and the exact one"
+
+
 MODELS = {
     "texel_decode": Model(_texel_run, _texel_vectors, _exact_check(_texel_run), True),
-    "fenney_power": Model(_power_run, _power_vectors, _exact_check(_power_run), True),
-    "fenney_dot": Model(_dot_run, _dot_vectors, _dot_check, False),
+    "fenney_power": Model(_power_run, _power_vectors, _exact_check(_power_run), True,
+                          against_exact=_fenney_power_exact,
+                          make_exact_vectors=_fenney_power_exact_vectors),
+    "fenney_dot": Model(_dot_run, _dot_vectors, _dot_check, False, against_exact=_dot_exact),
     "fenney_xz": Model(_xz_run, _xz_vectors, _xz_check, False),
     "fenney_polar": Model(_polar_run, _polar_vectors, _polar_check, False),
     "illum": Model(_illum_run, _illum_vectors, _illum_check, False),
-    "rotation": Model(_rotation_run, _rotation_vectors, _rotation_check, False),
+    "rotation": Model(_rotation_run, _rotation_vectors, _rotation_check, False,
+                      against_exact=_rotation_exact),
     "bump_polar": Model(_bump_run, _bump_vectors, _bump_check, False),
-    "raster": Model(_raster_run, _raster_vectors, _raster_check, False, typical=300),
+    "raster": Model(_raster_run, _raster_vectors, _raster_check, False, typical=300,
+                    against_exact=_float_exact("raster"),     # random triangles, no hard cases
+                    make_exact_vectors=lambda rng, n, **q: random_triangles(
+                        rng, n, **q, size=TYPICAL_SIZE)),
     "phong": Model(lambda inp, **q: shade.phong(inp, **q)[0], shade._phong_vectors,
-                   shade.phong_check, False),
+                   shade.phong_check, False, against_exact=_float_exact("phong")),
     "peercy": Model(lambda inp, **q: shade.peercy(inp, **q)[0], shade._peercy_vectors,
-                    shade.peercy_check, False),
+                    shade.peercy_check, False, against_exact=_float_exact("peercy")),
     "power_table": Model(lambda inp, **q: {"p": shade.power_table(inp["s"], **q)},
                          shade._power_vectors,
                          _exact_check(lambda inp, **q: {"p": shade.power_table(inp["s"], **q)}),
-                         True),
+                         True, against_exact=_power_table_exact),
     "colour": Model(lambda inp, **q: shade.colour(inp, **q), shade._colour_vectors,
                     _exact_check(shade.colour), True),
 }

@@ -18,13 +18,13 @@ The effects' own parts (scene keys, encodings, constants, conversions) are the s
 from .framebuffer import framebuffer, reference
 from .mesh import mesh, orientation, tangent_frames, \
     texcoords, turn, unit
-from .models import (bump_model, candidates, ideal, model, model_fragments, run_models,
-                     shade_fragments)
+from .models import (bump_model, candidates, ideal, interval, model, model_fragments,
+                     run_models, shade_fragments, within)
 from .parse import DEFAULTS, RULES, SceneError, load, parse, pipeline_params, tables
 from .prepare import prepare, rtl_inputs, view
 
 __all__ = ["SceneError", "DEFAULTS", "RULES", "tables", "load", "parse", "pipeline_params", "mesh",
            "orientation", "tangent_frames", "texcoords", "turn", "unit", "prepare", "view",
            "rtl_inputs", "model", "model_fragments", "run_models", "ideal", "bump_model",
-           "candidates", "shade_fragments", "framebuffer",
+           "candidates", "interval", "within", "shade_fragments", "framebuffer",
            "reference"]

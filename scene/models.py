@@ -9,7 +9,7 @@ from hdl.shade_unit.formats import RGB
 from .framebuffer import framebuffer
 
 __all__ = ["model", "model_fragments", "run_models", "ideal", "bump_model", "candidates",
-           "shade_fragments"]
+           "interval", "within", "shade_fragments"]
 
 
 def model(prep, **bound):
@@ -77,6 +77,38 @@ def candidates(prep, frag, ch):
         if colours is not None:
             return colours, stage.slack
     return None
+
+
+def interval(prep, frag, ch):
+    """``(lo, hi)``: where a stage's bound is an interval of the values it gives (the last
+    that has one: ``Stage.interval``), their least and largest per fragment; or None."""
+    stages = [s for s in prep["pipeline"].stages[1:] if s.bump]
+    for k in reversed(range(len(stages))):
+        before = lambda **bound: run_models(prep, frag, ch, stages[:k], **bound)
+        span = stages[k].interval(prep, frag, ch, before)
+        if span is not None:
+            return span
+    return None
+
+
+def within(prep, frag, ch, rgb):
+    """Per fragment, whether the RTL's colour ``rgb`` (n, 3) is one its stages' bounds allow
+    (the fragments being the model's ``frag``, its values ``ch``): one of the ``candidates``
+    within their slack; or between the colours at the ends of the ``interval``; or else
+    within one level of the model's colour (the raster's values are within one LSB of
+    2^-14 of its float model, which moves the 8-bit colour by far less than a level, and the
+    shading units after it are bit-exact or within one: tests/test_scenes.py)."""
+    rgb = np.asarray(rgb).astype(np.int64)
+    bound = candidates(prep, frag, ch)
+    if bound is not None:
+        colours, slack = bound
+        return np.abs(colours - rgb[None]).max(-1).min(0) <= slack
+    span = interval(prep, frag, ch)
+    if span is not None:
+        c_lo, c_hi = (shade_fragments(prep, {**ch, **end}).astype(np.int64) for end in span)
+        return ((rgb >= c_lo) & (rgb <= c_hi)).all(-1)
+    want = shade_fragments(prep, bump_model(prep, frag, ch), frag).astype(np.int64)
+    return np.abs(rgb - want).max(-1) <= 1
 
 
 def shade_fragments(prep, ch, frag=None):

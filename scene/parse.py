@@ -9,7 +9,7 @@ import numpy as np
 
 from . import obj
 from . import pipeline
-from .pipeline import BUMPS, METHODS, ScenePipeline, choose
+from .pipeline import BUMPS, METHODS, POWERS, ScenePipeline, choose
 from .stage import SceneError
 
 __all__ = ["SceneError", "DEFAULTS", "RULES", "tables", "parse", "load", "pipeline_params"]
@@ -25,7 +25,8 @@ DEFAULTS = {
                  "shininess": 32.0},
     "lights": [{"type": "directional", "to_light": [-1.0, -1.0, 2.0],
                 "color": [1.0, 1.0, 1.0]}],
-    "shading": {"method": "xshading", "specular": True, "power": "table"},
+    # [shading]'s choices are the stages' (scene.pipeline), the first the default
+    "shading": {"method": METHODS[0], "specular": True, "power": POWERS[0]},
     "bump": {"method": "none"},       # the rest of [bump]: the bump stages' scene_keys
     "turntable": {"spin": "light", "axis": [0.0, 0.0, 1.0], "degrees": 360.0, "frames": 24,
                   "frame": 0},
@@ -49,7 +50,7 @@ RULES = {
     "lights": {"type": ("choice", ("directional",)), "to_light": ("vec", 3, -INF, INF),
                "color": ("vec", 3, 0.0, 2.0)},
     "shading": {"method": ("choice", METHODS), "specular": ("bool",),
-                "power": ("choice", ("table", "fenney"))},
+                "power": ("choice", POWERS)},
     "bump": {"method": ("choice", BUMPS)},
     "turntable": {"spin": ("choice", ("light", "mesh")), "axis": ("vec", 3, -INF, INF),
                   "degrees": ("num", -INF, INF), "frames": ("int", 1, 100000),

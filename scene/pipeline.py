@@ -1,10 +1,10 @@
 """A scene's pipeline: the stages the scene calls for, in order, each a component joined to the
 next by an ``amaranth.lib.stream`` (``wiring.connect``).
 
-    triangles -> raster -> [texture -> texel_decode -> fenney_dot]   bump = fenney_xz
-                           [texture -> fenney_polar]                  bump = fenney_polar
-                           [texture -> bump_polar]                    bump = angular
-                           [phong]                                    method = phong
+    triangles -> raster -> [texture -> texel_decode -> fenney_dot]   a bump method's
+                           [texture -> fenney_polar]                  stages, each wanted
+                           [texture -> bump_polar]                    for its ``when``
+                           [phong]                                    a shading method's
                         -> [power_table | fenney_power]               specular (and no
                                                                       stage gives powers)
                         -> colour -> fragments (tri, x, y, depth, r, g, b)
@@ -24,11 +24,9 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
 from hdl.fixed import Field
-from hdl.illum_unit.fenney_dot import FenneyDot as DotUnit
 from hdl.setup_unit.formats import MODES, VALUE
 from hdl.shade_unit.formats import LEVEL, RGB
 from hdl.span_unit import Raster as RasterUnit
-from hdl.texture_unit import FILTERS, MAX_TEXTURE
 from hdl.unit import Unit, skid
 from hdl.units import PIPELINES
 
@@ -43,16 +41,24 @@ from .stages.fenney_power import FenneyPower
 from .stages.power_table import PowerTable
 from .stages.raster import Raster
 from .stages.texel_decode import TexelDecode
-from .stages.texture import MEMORIES, Texture
+from .stages.texture import Texture
 
 __all__ = ["ScenePipeline", "STAGES", "METHODS", "BUMPS", "wanted", "choose", "units_in"]
 
 STAGES = (Raster, Texture, TexelDecode, FenneyDot, FenneyPolar, BumpPolar, Phong, PowerTable,
           FenneyPower, Colour)
-# the shading methods: the raster's interpolation modes, and those a stage is wanted for; the
-# bump methods: those a stage is wanted for
-METHODS = MODES + tuple(dict.fromkeys(s.when["method"] for s in STAGES if "method" in s.when))
-BUMPS = ("none",) + tuple(dict.fromkeys(s.when["bump"] for s in STAGES if "bump" in s.when))
+
+
+def _choices(key):
+    return tuple(dict.fromkeys(s.when[key] for s in STAGES if key in s.when))
+
+
+# the keys that choose stages, their values read from the stages' ``when`` (the first is the
+# default): the shading methods (the raster's interpolation modes, and those a stage is wanted
+# for), the power kinds and the bump methods
+METHODS = MODES + _choices("method")
+POWERS = _choices("power")
+BUMPS = ("none",) + _choices("bump")
 MAX_CHANNELS = RasterUnit.RANGES["channels"][1]
 SOURCE = {"x": "_pix_x", "y": "_pix_y"}          # the fragment's pixel, as the stages carry it
 
@@ -62,36 +68,14 @@ class ScenePipeline(Unit):
     DOC = "A scene's pipeline: raster -> (bump stages) -> (phong) -> (power) -> colour"
     # Its parameters are the effects and the sizes; a scene's data (lights, material, tables,
     # the bump map) is loaded through the host port, so two scenes that differ only in their
-    # data share one Verilog and one model.
-    PARAMS = {"screen_bits": 8, "sub_bits": 4, "method": "xshading", "lights": 1,
-              "specular": True, "power": "table", "mant_bits": 6,
-              "recip": "newton", "recip_iters": 2, "rsqrt_iters": 2,
-              "setup_mults": 1, "row_mults": 0,     # the raster's multipliers (hdl.span_unit)
-              "setup_ii": 0, "setup_narrow": 0,     # its setup's interval, 18 x 18 multipliers
-              "row_serial": 0,                      # its row engine's channels in turn
-              "setup_serial": 0,                    # its setup's channels in turn
-              "vector_bits": 14,                    # its vector channels' fraction bits
-              "bump": "none", "bump_size": 256, "texture": "external",
-              "filter": "nearest", "trig_bits": 10, "rotation": "paper", "normalize": False,
-              "rsqrt_bits": 12,
-              # the texel cache (per bank: lines, texels a line, ways) and its queue
-              "cache_lines": 64, "cache_line": 1, "cache_ways": 2, "tex_queue": 64,
-              "bank_ports": True}   # a memory port per bank (bilinear: 4), or one shared
-    RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "method": METHODS, "lights": (1, 4),
-              "power": ("table", "fenney"), "mant_bits": (3, 8), "texture": MEMORIES,
-              "recip": ("newton", "divide"), "recip_iters": (0, 3),
-              "setup_mults": RasterUnit.RANGES["setup_mults"],
-              "row_mults": RasterUnit.RANGES["row_mults"],
-              "setup_ii": RasterUnit.RANGES["setup_ii"],
-              "setup_narrow": RasterUnit.RANGES["setup_narrow"],
-              "row_serial": RasterUnit.RANGES["row_serial"],
-              "setup_serial": RasterUnit.RANGES["setup_serial"], "rsqrt_iters": (1, 3),
-              "vector_bits": (4, VALUE.frac_bits),
-              "bump": BUMPS,
-              "bump_size": (16, MAX_TEXTURE), "filter": FILTERS,
-              "trig_bits": (4, 16), "rotation": ("paper", "exact"),
-              "rsqrt_bits": DotUnit.RANGES["rsqrt_bits"], "cache_lines": (2, 1024),
-              "cache_line": (1, 64), "cache_ways": (1, 8), "tex_queue": (4, 512)}
+    # data share one Verilog and one model. Beside the sizes and the choices, each stage's
+    # own (``Stage.build_params``).
+    CHOICES = {"method": METHODS, "power": POWERS, "bump": BUMPS}
+    OWN = {k: v for s in STAGES for k, v in s.build_params.items()}
+    PARAMS = {"screen_bits": 8, "sub_bits": 4, "lights": 1, "specular": True,
+              **{k: v[0] for k, v in CHOICES.items()}, **{k: d for k, (d, _) in OWN.items()}}
+    RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "lights": (1, 4), **CHOICES,
+              **{k: r for k, (_, r) in OWN.items() if r is not None}}
     def validate(self, **q):
         self.stages = choose(q)
         self.stream_ports = {name: port for s in self.stages for name, port in s.ports.items()}

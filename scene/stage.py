@@ -17,6 +17,9 @@ A stage subclasses :class:`Stage` and supplies
 - ``tables``: the RAMs the host loads (``{key: lut}``, the lut giving depth and format; the
   key ``texture`` is the on-chip texture), and ``table_values(scene)``: their contents;
 - ``params``: its unit's parameters, from the scene's; ``why``: the scene key that calls for it;
+- ``build_params``: the pipeline's parameters it owns, ``{name: (default, range)}`` (a
+  range as ``hdl.unit``'s ``RANGES``; None for a bool): ``scene.pipeline`` gathers them;
+- ``sweeps()``: its rows of ``make tradeoffs`` (:class:`Sweep`), what accuracy costs in it;
 - ``validate(q)``: its checks on the scene, raising ``ValueError`` that names the scene key;
 - ``latency``: its register stages, from its units;
 - ``rtl(p, v, uni)``: its stages on the :class:`hdl.unit.Pipeline` ``p``, from the values
@@ -26,6 +29,8 @@ A stage subclasses :class:`Stage` and supplies
   tables' write buses (``hdl.lut.WriteBus``), by key;
 - ``model(prep, frag, ch, bound)``: the same step in the float or integer model, on numpy
   arrays per fragment; ``bound``: the tests' offsets, each stage takes the ones it knows;
+  ``candidates``, ``interval`` and ``bounds``: how far the RTL may be from it (the tests'
+  and ``make fuzz``'s checks, ``scene.models.within``);
   ``ideal(prep, frag, ch)``: its algorithm on reals; ``format_group``: the group of formats
   it belongs to (``scene.models.ideal``); ``convert(ch, ideal)``: the values it gives, from
   its model's formats to its ideal's reals (or back), for the stage after it;
@@ -48,6 +53,8 @@ and, for the scene driver (``scene/prepare.py``), which never names a stage:
 joins stages with ``wiring.connect``. Inside a stage the units share one enable (the
 :class:`hdl.unit.Pipeline`), which is cheap; between stages the handshake is the stream's.
 """
+from dataclasses import dataclass, field
+
 import numpy as np
 from amaranth.hdl import Const, Module, Shape, Signal, Value
 from amaranth.lib import data, stream, wiring
@@ -60,12 +67,37 @@ from hdl.unit import Pipeline
 
 from . import host as hostport
 
-__all__ = ["Stage", "StageUnit", "Link", "SceneError", "convert_powers", "lanes", "lane_key",
+__all__ = ["Stage", "StageUnit", "Sweep", "Link", "SceneError", "convert_powers", "lanes", "lane_key",
            "raw"]
 
 
 class SceneError(ValueError):
     """A scene file that cannot be rendered: the message names the key."""
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A row of ``make tradeoffs`` that a stage asks for: a knob at one setting, the rest at
+    their defaults, and what is built and measured for it."""
+    knob: str
+    setting: str
+    unit: str = None           # the unit synthesised (``build = "unit"``) and tested alone
+    params: dict = field(default_factory=dict)      # its parameters
+    scene: str = None          # scenes/<scene>.toml rendered: accuracy and cycles
+    hardware: dict = field(default_factory=dict)    # the scene pipeline's parameters set
+    build: str = "unit"        # what is synthesised: the unit, the scene's "raster" or its
+    #                            whole "pipeline"
+    rows: object = False       # the unit's golden rows run against its exact function (an
+    #                            int; None: its own sweep; False: not run)
+    default: bool = False
+    quick: bool = False        # in ``make tradeoffs --quick`` (no raster: a few minutes)
+
+    def __post_init__(self):
+        if self.build not in ("unit", "raster", "pipeline"):
+            raise ValueError(f"Sweep.build: unit, raster or pipeline, not {self.build!r}")
+        if self.build != "unit" and not self.scene:
+            raise ValueError(f"Sweep {self.knob} {self.setting}: build = {self.build!r} "
+                             f"needs a scene")
 
 
 class Stage:
@@ -76,6 +108,7 @@ class Stage:
     flat = ()
     uniforms = ()
     params = {}
+    build_params = {}
     why = ""
     scene_keys = {}
     gives = ()             # kinds of value it gives that one stage gives at most ("powers")
@@ -185,10 +218,23 @@ class Stage:
         .candidates``). None: the model's colour, within a level."""
         return None
 
+    def interval(self, prep, frag, ch, before):
+        """Where the colour is monotone in the values it gives, and its bound is offsets of
+        its inputs: the least and largest of each value per fragment, ``({key: lo}, {key:
+        hi})`` (``scene.models.within``); None: no such bound. ``before(**offsets)``: the
+        stages before it on ``ch``, their models with the offsets (the texture's ``ds``,
+        ``dt``), the values as it takes them."""
+        return None
+
     def bounds(self, prep, ch):
         """Per value it gives and fragment, how far (VALUE LSBs) the RTL may be from its
         model; none: exact."""
         return {}
+
+    @classmethod
+    def sweeps(cls):
+        """Its rows of ``make tradeoffs``: :class:`Sweep` each."""
+        return ()
 
     def describe(self):
         """The stage in ``metrics.json``: its unit, why, its parameters and latency."""

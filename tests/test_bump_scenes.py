@@ -1,34 +1,17 @@
 """Bump scenes (issue 11, scenes.md ``[bump]``): fenney_polar, fenney_xz and angular through
 the renderer.
 
-fenney_polar's bound, RTL against model, per fragment: the colour unit is bit-exact, so every
-RTL fragment must equal the model's colour for some choice of
-- the texel: the raster's texture coordinates are within one LSB (2**-14 tile) of its float
-  model, and the model rounds them to the nearest LSB, so the raw coordinates differ by at
-  most 1 (1.5 before rounding to integers): the texel of the model's raw value -1, 0 or +1,
-  along s and along t;
-- the intensity: fenney_polar is within ``golden.fenney.polar_bound`` (0.874) of the float
-  eq 3, the model rounds it (0.5), so the integers differ by at most 1: -1, 0 or +1 per lane.
-Nothing else may differ (the constants, the power, the colour sum are exact).
+Each RTL fragment must be the model's, in its order, with a colour its bump stage's bound
+allows (``scene.models.within``); each bound is derived in its stage:
 
-fenney_xz's bound: the colour is monotonic in d and in s (coefficients >= 0, the powers
-increase), so every RTL colour must lie between the model's colours at the least and the
-largest d and s (per light and vector) over
-- the texture coordinates' raw values -1, 0, +1 (as above; bilinear weights move with them);
-- each component of the interpolated vector -1, 0, +1 in its raw value (the raster's LSB; at
-  ``vector_bits`` p, -2**(14 - p), 0, +2**(14 - p)), which can move its rounding to the
-  patent's s8;
-- the dot product's X -1, 0, +1: fenney_dot is within ``golden.fenney.dot_bound`` (below one
-  LSB) of the float, the model rounds.
-
-angular's bound, likewise monotone: between the least and the largest d and p over
-- the raw values of phi_N, theta_N and the twist psi -1, 0, +1 (each can move its angle code by
-  one), the texture coordinates -1, 0, +1;
-- bump_polar's own bound on diffuse and specular (``golden.angular.bump_polar_bounds``: the
-  rotations' interval bounds through the illumination's tables), then >> 1 and >> 5 as the
-  pipeline takes them.
+- fenney_polar (``FenneyPolar.candidates``): the colour unit is bit-exact, so the RTL's must
+  equal the model's for some choice of the texel (raw texture coordinates -1, 0, +1) and of
+  each lane's intensity (-1, 0, +1: ``golden.fenney.polar_bound``, 0.874, and the model's
+  rounding);
+- fenney_xz (``FenneyDot.interval``) and angular (``BumpPolar.interval``): the colour is
+  monotone in d and s (p), so it must lie between the model's at their least and largest
+  over the offsets of their inputs that the units' bounds allow.
 """
-import itertools
 import numpy as np
 import pytest
 
@@ -95,33 +78,14 @@ def test_polar_scene_rtl_matches_model(light):
     assert differ <= 0.05 * len(prep["inputs"]["x0"]) * 20        # rare: edges of roundings
 
 
-def _xz_interval(prep, ch):
-    """The least and largest d and s per lane that the bound allows."""
-    lo, hi = {}, {}
-    lanes = [f"{t}{k}" for t, k in prep["bump"]["lanes"]]
-    keys = [("d" if t == "l" else "s") + str(k) for t, k in prep["bump"]["lanes"]]
-    lsb = 1 << (14 - prep["params"]["vector_bits"])     # the vector channels' raw LSB
-    for ds, dt in itertools.product((-1, 0, 1), repeat=2):
-        for dl in itertools.product((-lsb, 0, lsb), repeat=3):
-            out = S.bump_model(prep, None, ch, ds=ds, dt=dt, dl={lane: dl for lane in lanes})
-            for key, val in ((k, out[k]) for k in keys):
-                lo[key] = np.minimum(lo.get(key, val), val)
-                hi[key] = np.maximum(hi.get(key, val), val)
-    step = 16 * 2.0 ** -14                              # one LSB of X, as a value
-    return ({k: np.maximum(v - step, 0) for k, v in lo.items()},
-            {k: np.minimum(v + step, 1023 * step) for k, v in hi.items()})
-
-
-def _within_interval(prep, ch, out, interval):
-    """Every RTL colour between the model's at the ends of ``interval`` (``(lo, hi)``: the
-    least and largest of each lane's values); the RTL's colours."""
+def _within_interval(prep, frag, ch, out):
+    """Every RTL colour between the model's at the ends of its stage's interval (the bound
+    above: ``Stage.interval``, through ``scene.models.within``); the RTL's colours."""
     rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
-    lo, hi = interval
-    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
-    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
-    bad = np.flatnonzero(((rtl < c_lo) | (rtl > c_hi)).any(-1))
+    assert S.interval(prep, frag, ch) is not None
+    bad = np.flatnonzero(~S.within(prep, frag, ch, rtl))
     assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
-                          f"RTL {rtl[bad[0]]}, allowed {c_lo[bad[0]]}..{c_hi[bad[0]]}")
+                          f"RTL {rtl[bad[0]]}")
     return rtl
 
 
@@ -162,7 +126,7 @@ def test_xz_scene_rtl_within_bound(filter, light):
         invalid = fenney.texel_decode(x, z)["invalid"].astype(bool)
         assert invalid.sum() > 50 and (~invalid).sum() > 50      # both kinds, many of each
         assert ((x == 255) | (z == 255)).any()
-    rtl = _within_interval(prep, ch, out, _xz_interval(prep, ch))
+    rtl = _within_interval(prep, frag, ch, out)
     if filter == "nearest":
         model = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
         assert (np.abs(rtl - model.astype(int)).max(-1) > 1).mean() < 0.01
@@ -186,7 +150,7 @@ def test_xz_scene_with_fewer_vector_bits_within_bound():
     frag, ch = S.model_fragments(prep)
     assert len(out["x"]) == len(frag["x"]) > 500
     assert not np.any(np.rint(ch["l0x"] * 2.0 ** 8) - ch["l0x"] * 2.0 ** 8)   # 8 bits
-    _within_interval(prep, ch, out, _xz_interval(prep, ch))
+    _within_interval(prep, frag, ch, out)
 
 
 def test_xz_flat_map_gives_the_unbumped_surface():
@@ -221,31 +185,6 @@ def test_xz_light_length_on_the_torus():
     assert err["xshading"][0] < err["linear"][0] / 4
 
 
-def _angular_outputs(prep, ch, **offsets):
-    """bump_polar's float outputs and its bounds per fragment, its inputs formed as the
-    texture and bump_polar stages form them, with the offsets of the bound."""
-    texture, stage = prep["pipeline"].stages[1:3]
-    inp = stage.inputs(prep, texture.model(prep, None, ch, offsets), offsets)
-    params = {**stage.unit.params, "shininess": stage.shininess(prep["scene"])}   # loaded
-    return (angular.bump_polar_float(inp, **params),
-            angular.bump_polar_bounds(inp, **params))
-
-
-def _angular_interval(prep, ch):
-    lo, hi = {}, {}
-    for ds, dt in itertools.product((-1, 0, 1), repeat=2):
-        for da in itertools.product((-1, 0, 1), repeat=3):
-            out, bound = _angular_outputs(prep, ch, da=da, ds=ds, dt=dt)
-            for key, src, shift, scale in (("d0", "diffuse", 1, 2.0 ** -14),
-                                           ("p0", "specular", 5, 1)):
-                a = (np.floor(np.maximum(out[src] - bound[src], 0)).astype(np.int64)
-                     >> shift) * scale
-                b = (np.ceil(out[src] + bound[src]).astype(np.int64) >> shift) * scale
-                lo[key] = np.minimum(lo.get(key, a), a)
-                hi[key] = np.maximum(hi.get(key, b), b)
-    return lo, hi
-
-
 @VERILATOR
 @pytest.mark.xdist_group("verilator-scene-angular")                  # one model
 @pytest.mark.parametrize("rotation,light", [("paper", [-1.0, -1.0, 2.0]),
@@ -266,7 +205,7 @@ def test_angular_scene_rtl_within_bound(rotation, light):
     assert len(out["x"]) == len(frag["x"]) > 500
     for key in ("tri", "x", "y"):
         np.testing.assert_array_equal(out[key], frag[key])
-    _within_interval(prep, ch, out, _angular_interval(prep, ch))
+    _within_interval(prep, frag, ch, out)
 
 
 def test_angular_flat_map_gives_the_unbumped_surface():
@@ -281,7 +220,7 @@ def test_angular_flat_map_gives_the_unbumped_surface():
     turn = 2 * np.pi
     n = angular.to_vector(ch["phin"] * turn, ch["thetan"] * turn)
     exact = np.clip(n @ prep["float"]["L"][0], 0, 1)
-    lo, hi = _angular_interval(prep, ch)
+    lo, hi = S.interval(prep, frag, ch)
     assert (exact >= lo["d0"] - 2.0 ** -14).all() and (exact <= hi["d0"] + 2.0 ** -14).all()
     plain = S.shade_fragments(prep, {**ch, "d0": exact})
     bumped = S.shade_fragments(prep, {**ch, **S.bump_model(prep, frag, ch)})
@@ -447,14 +386,8 @@ def test_dense_bump_scenes_render(bump, tables):
     out = _rtl(prep, 30, 0.8, p_ready=0.8, seed=7)
     frag, ch = _same_fragments(prep, out)
     rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
-    if bump["method"] == "fenney_polar":
-        hit = (S.candidates(prep, frag, ch)[0] == rtl[None]).all(-1).any(0)
-        assert hit.all(), f"{(~hit).sum()} fragments match no colour within the bound"
-        return
-    lo, hi = (_xz_interval if bump["method"] == "fenney_xz" else _angular_interval)(prep, ch)
-    c_lo = S.shade_fragments(prep, {**ch, **lo}).astype(int)
-    c_hi = S.shade_fragments(prep, {**ch, **hi}).astype(int)
-    assert not ((rtl < c_lo) | (rtl > c_hi)).any()
+    hit = S.within(prep, frag, ch, rtl)
+    assert hit.all(), f"{(~hit).sum()} fragments outside the bound"
 
 
 @VERILATOR

@@ -1,6 +1,8 @@
 """The bump_polar stage (seed 003): L and H rotated into the frame of the interpolated normal
 (its angles phi_N, theta_N and the texture frame's twist psi, linear channels in turns), then
 the law-of-cosines illumination against the texel's (phi_B + psi, theta_B)."""
+import itertools
+
 import numpy as np
 from amaranth.hdl import Cat, Const
 
@@ -9,7 +11,7 @@ from hdl.fixed import Field, binary_angle
 from hdl.illum_unit.bump_polar import BumpPolar as Unit
 from hdl.setup_unit.formats import VALUE
 
-from ..stage import Stage, convert_powers, raw
+from ..stage import Stage, Sweep, convert_powers, raw
 from .texture import ANGLE_BITS
 
 LIGHT = ("phi_l", "theta_l", "phi_h", "theta_h")      # L and H in polar form, world frame
@@ -21,7 +23,27 @@ class BumpPolar(Stage):
     channels = (("phin", "linear", 0), ("thetan", "linear", 0), ("psi", "linear", 0))
     when = {"bump": "angular"}
     gives = ("lighting", "powers")    # N.L; its own specular table: no power stage
-    scene_keys = {"bump": {"rotation": ("paper", ("choice", ("paper", "exact")))}}
+    ROTATIONS = ("paper", "exact")
+    scene_keys = {"bump": {"rotation": (ROTATIONS[0], ("choice", ROTATIONS))}}
+    build_params = {"rotation": (ROTATIONS[0], ROTATIONS)}
+
+    @classmethod
+    def sweeps(cls):
+        """The rotation (seed 003): its method (the exact one's CORDIC iterations), angle bits
+        and table address bits; and seed 003's comparison, the Cartesian baseline (Peercy)
+        beside the angular unit."""
+        rows = [Sweep("rotation", label, "rotation", p, scene, rows=20000, default=not p)
+                for label, p, scene in (
+                    ("paper", {}, "bump_angular"),
+                    ("exact", {"method": "exact"}, "bump_angular_exact"),
+                    ("exact, 12 iterations", {"method": "exact", "iterations": 12}, None),
+                    ("10-bit angles", {"angle_bits": 10, "trig_bits": 12, "asin_bits": 10},
+                     None),
+                    ("tables -2 bits", {"asin_bits": 10, "atan_bits": 6, "prop_bits": 10},
+                     None))]
+        return rows + [Sweep("bump architecture", "Cartesian (Peercy)", "peercy", rows=20000),
+                       Sweep("bump architecture", "angular (seed 003)", cls.name,
+                             default=True)]
 
     @property
     def uniforms(self):
@@ -171,6 +193,30 @@ class BumpPolar(Stage):
             dots.append(np.clip(angular.inner_product(pr, tr, pb + psi, tb), 0, 1))
         ch = {k: x for k, x in ch.items() if k not in ("phin", "thetan", "psi", "_n")}
         return {**ch, "d0": dots[0], "p0": dots[1] ** self.shininess(prep["scene"])}
+
+    def interval(self, prep, frag, ch, before):
+        """The colour is monotone in d and p, so the RTL's lies between the model's at the
+        least and largest of each over: the raw phi_N, theta_N and psi -1, 0, +1 (each can move
+        its angle code by one), the texture coordinates -1, 0, +1, and the unit's own bound on
+        diffuse and specular (``golden.angular.bump_polar_bounds``: the rotations' interval
+        bounds through the illumination's tables), then >> 1 and >> 5 as the pipeline takes
+        them."""
+        lo, hi = {}, {}
+        params = {**self.unit.params, "shininess": self.shininess(prep["scene"])}   # loaded
+        for ds, dt in itertools.product((-1, 0, 1), repeat=2):
+            for da in itertools.product((-1, 0, 1), repeat=3):
+                bound = {"da": da, "ds": ds, "dt": dt}
+                inp = self.inputs(prep, before(**bound), bound)
+                out = angular.bump_polar_float(inp, **params)
+                err = angular.bump_polar_bounds(inp, **params)
+                for key, src, shift, scale in (("d0", "diffuse", 1, VALUE.lsb),
+                                               ("p0", "specular", 5, 1)):
+                    a = (np.floor(np.maximum(out[src] - err[src], 0)).astype(np.int64)
+                         >> shift) * scale
+                    b = (np.ceil(out[src] + err[src]).astype(np.int64) >> shift) * scale
+                    lo[key] = np.minimum(lo.get(key, a), a)
+                    hi[key] = np.maximum(hi.get(key, b), b)
+        return lo, hi
 
     def model(self, prep, frag, ch, bound):
         """``golden.angular.bump_polar_float`` (rotations paper or exact, the illumination's

@@ -1,6 +1,8 @@
 """The fenney_dot stage (seed 004 eq 1): the bump vector dotted with each lane's interpolated
 vector, L' and H' in the tangent frame, quadratic with each vector's own per-edge constants
 (seed 000 section 2) or linear: N.L and N.H per light."""
+import itertools
+
 import numpy as np
 
 from golden import bump as bumps, fenney
@@ -8,7 +10,7 @@ from hdl.illum_unit.fenney_dot import FenneyDot as Unit, dot_lanes
 from hdl.setup_unit.formats import EDGE, VALUE
 from amaranth.hdl import Cat, Const, Mux
 
-from ..stage import SceneError, Stage, lane_key, raw
+from ..stage import SceneError, Stage, Sweep, lane_key, raw
 
 
 class FenneyDot(Stage):
@@ -16,6 +18,22 @@ class FenneyDot(Stage):
     name = "fenney_dot"
     when = {"bump": "fenney_xz"}
     gives = ("lighting",)           # N.L and N.H: the raster interpolates none
+    build_params = {"vector_bits": (VALUE.frac_bits, (4, VALUE.frac_bits)),
+                    "normalize": (False, None),
+                    "rsqrt_bits": (Unit.PARAMS["rsqrt_bits"], Unit.RANGES["rsqrt_bits"])}
+
+    @classmethod
+    def sweeps(cls):
+        """Its vector channels (six of its nine) rounded to fewer fraction bits, their Phi, d
+        and 2A kept that much shorter in the raster (the patent's s8 takes 7); and its dot
+        product plain or renormalised by a table of ``rsqrt_bits``."""
+        rows = [Sweep("vector bits", str(b), scene="bump_xz", hardware={"vector_bits": b},
+                      build="raster", default=b == VALUE.frac_bits) for b in (14, 10, 8)]
+        return rows + [Sweep(cls.name, label, cls.name, p, "bump_xz", p, rows=20000,
+                             default=not p, quick=label in ("plain", "renorm 12"))
+                       for label, p in (("plain", {}),
+                                        ("renorm 8", {"normalize": True, "rsqrt_bits": 8}),
+                                        ("renorm 12", {"normalize": True, "rsqrt_bits": 12}))]
 
     @property
     def channels(self):
@@ -109,6 +127,29 @@ class FenneyDot(Stage):
             lv = np.stack([ch.pop(f"{t}{k}{a}") for a in "xyz"], -1)
             ch[lane_key(t, k)] = (b * lv).sum(-1)
         return ch
+
+    def interval(self, prep, frag, ch, before):
+        """The colour is monotone in d and in s (coefficients >= 0, the powers increase), so
+        the RTL's lies between the model's at the least and largest d and s per lane over:
+        the texture coordinates' raw values -1, 0, +1 (bilinear weights move with them); each
+        component of the interpolated vector -1, 0, +1 raw LSB (at ``vector_bits`` p,
+        2**(14 - p)), which can move its rounding to the patent's s8; and X -1, 0, +1 (the
+        unit is within ``golden.fenney.dot_bound``, below one LSB, of the float; the model
+        rounds)."""
+        lo, hi = {}, {}
+        lanes = [f"{t}{k}" for t, k in self.lanes]
+        keys = [lane_key(t, k) for t, k in self.lanes]
+        lsb = 1 << (VALUE.frac_bits - self.q["vector_bits"])   # the vector channels' raw LSB
+        for ds, dt in itertools.product((-1, 0, 1), repeat=2):
+            for dl in itertools.product((-lsb, 0, lsb), repeat=3):
+                bound = {"ds": ds, "dt": dt, "dl": {lane: dl for lane in lanes}}
+                out = self.model(prep, frag, before(**bound), bound)
+                for key in keys:
+                    lo[key] = np.minimum(lo.get(key, out[key]), out[key])
+                    hi[key] = np.maximum(hi.get(key, out[key]), out[key])
+        step = 16 * VALUE.lsb                               # one LSB of X, as a value
+        return ({k: np.maximum(v - step, 0) for k, v in lo.items()},
+                {k: np.minimum(v + step, 1023 * step) for k, v in hi.items()})
 
     def model(self, prep, frag, ch, bound):
         """Each lane's vector as the patent's s8 (round(127 v), clamped to +-127, from its raw

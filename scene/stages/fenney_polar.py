@@ -9,7 +9,7 @@ from hdl.illum_unit.fenney_polar import FenneyPolar as Unit, polar_lanes
 from hdl.setup_unit.formats import VALUE
 
 from ..mesh import unit
-from ..stage import Stage, lane_key
+from ..stage import Stage, Sweep, lane_key
 
 CONSTANTS = ("k1", "k2", "k3", "q")     # a flat word, k1 at the top, 8 bits each
 
@@ -24,6 +24,13 @@ class FenneyPolar(Stage):
     name = "fenney_polar"
     when = {"bump": "fenney_polar"}
     gives = ("lighting",)           # N.L and N.H: the raster interpolates none
+    build_params = {"trig_bits": (10, (4, 16))}
+
+    @classmethod
+    def sweeps(cls):
+        """Fenney's first embodiment (the other bump methods are the fenney_dot and rotation
+        rows)."""
+        return [Sweep("bump method", cls.name, cls.name, scene="bump_polar", default=True)]
 
     @property
     def flat(self):

@@ -9,7 +9,7 @@ from hdl.fixed import Field, u
 from hdl.illum_unit.fenney_power import FenneyPower as Unit, power_lanes
 from hdl.setup_unit.formats import VALUE
 
-from ..stage import Stage, convert_powers, raw
+from ..stage import Stage, Sweep, convert_powers, raw
 
 
 def concentration(scene):
@@ -20,6 +20,12 @@ def concentration(scene):
 class FenneyPower(Stage):
     name = "fenney_power"
     why = "shading.specular = true, shading.power = fenney (C a register)"
+
+    @classmethod
+    def sweeps(cls):
+        """The patent's approximation, beside the power table's rows."""
+        return [Sweep("power", cls.when["power"], cls.name, scene="fenney_power", rows=None,
+                      quick=True)]
     when = {"specular": True, "power": "fenney"}
     gives = ("powers",)
     defers = True                 # bump_polar gives its own

@@ -17,6 +17,7 @@ class Phong(Stage):
     why = "shading.method = phong"
     when = {"method": "phong"}
     gives = ("lighting",)           # N.L and N.H: the raster interpolates none
+    build_params = {"rsqrt_iters": (2, (1, 3))}
 
     @property
     def params(self):

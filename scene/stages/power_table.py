@@ -7,7 +7,7 @@ from golden import shade
 from hdl.shade_unit.power import PowerTable as Unit, power_lanes, power_lut
 from hdl.setup_unit.formats import VALUE
 
-from ..stage import Stage, convert_powers, raw
+from ..stage import Stage, Sweep, convert_powers, raw
 
 SHAPE = Unit.PARAMS["shininess"]          # the table's shape only: its contents are loaded
 
@@ -18,6 +18,15 @@ class PowerTable(Stage):
     when = {"specular": True, "power": "table"}
     gives = ("powers",)
     defers = True                 # bump_polar gives its own
+    build_params = {"mant_bits": (6, (3, 8))}
+
+    @classmethod
+    def sweeps(cls):
+        """The table's mantissa bits (``make tradeoffs``' power rows, beside Fenney's)."""
+        default = cls.build_params["mant_bits"][0]
+        return [Sweep("power", f"table {b}", cls.name, {} if b == default else {"mant_bits": b},
+                      "default", {} if b == default else {"mant_bits": b}, rows=None,
+                      default=b == default, quick=b == default) for b in (4, 6, 8)]
 
     @property
     def params(self):

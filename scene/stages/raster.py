@@ -16,6 +16,11 @@ class Raster(Stage):
     format_group = "raster"
 
     given = ()            # what the stages after it give (``scene.pipeline.choose``)
+    KNOBS = ("setup_mults", "row_mults", "setup_ii", "setup_narrow", "row_serial",
+             "setup_serial")       # hdl.span_unit's architecture, passed on where set
+    build_params = {"recip": ("newton", RasterUnit.RANGES["recip"]),
+                    "recip_iters": (2, RasterUnit.RANGES["recip_iters"]),
+                    **{k: (RasterUnit.PARAMS[k], RasterUnit.RANGES[k]) for k in KNOBS}}
 
     @property
     def channels(self):
@@ -37,9 +42,7 @@ class Raster(Stage):
         self.params = dict(screen_bits=q["screen_bits"], sub_bits=q["sub_bits"],
                            channels=len(channels), modes=",".join(m for _, m, _ in channels),
                            recip=q["recip"], recip_iters=q["recip_iters"])
-        knobs = ("setup_mults", "row_mults", "setup_ii", "setup_narrow", "row_serial",
-                 "setup_serial")
-        self.params.update({k: q[k] for k in knobs
+        self.params.update({k: q[k] for k in self.KNOBS
                             if q[k] != RasterUnit.PARAMS[k]})      # defaults: Verilog unchanged
         precision = [(bits or {}).get(n, VALUE.frac_bits) for n, _, _ in channels]
         if min(precision) < VALUE.frac_bits:

@@ -28,7 +28,7 @@ from hdl.unit import Pipeline
 
 from ..host import equals
 from ..mesh import tangent_frames, texcoords
-from ..stage import Link, SceneError, Stage, raw
+from ..stage import Link, SceneError, Stage, Sweep, raw
 
 ANGLE_BITS = 12               # angular: every angle in turns * 2**12 (the rotation's default)
 MEMORIES = ("external", "onchip")
@@ -65,10 +65,22 @@ class Texture(Stage):
                            "depth": (1.0, ("num", 0.0, math.inf)),
                            "filter": ("nearest", ("choice", FILTERS))}}
     channels = (("s", "linear", 0), ("t", "linear", 0))
+    # the map's size and filter (the scene's), the memory and the texel cache (per bank:
+    # lines, texels a line, ways), its queue, and a memory port per bank (bilinear: 4) or one
+    build_params = {"bump_size": (256, (16, MAX_TEXTURE)), "texture": (MEMORIES[0], MEMORIES),
+                    "filter": (FILTERS[0], FILTERS), "cache_lines": (64, (2, 1024)),
+                    "cache_line": (1, (1, 64)), "cache_ways": (2, (1, 8)),
+                    "tex_queue": (64, (4, 512)), "bank_ports": (True, None)}
 
     @classmethod
     def wanted(cls, q):
         return q["bump"] != "none"
+
+    @classmethod
+    def sweeps(cls):
+        """The filter: the whole fenney_xz pipeline (the texture is not a unit of its own)."""
+        return [Sweep("filter", f, scene="bump_xz", hardware={"filter": f}, build="pipeline",
+                      default=f == "bilinear") for f in FILTERS]
 
     @property
     def kind(self):
