@@ -1,0 +1,137 @@
+"""Issue 49's per-triangle block floating point, measured before it is built: how many
+mantissa bits the row engine's products need for each channel to stay within its bound of
+the float model, when each triangle's values share an exponent per group.
+
+The row engine (docs/quadratic.md) computes per row, at the span's first pixel (u, v):
+Phi = f + u t1 + v t2 with t1 = d + a u + c v and t2 = e + b v (seed 000 eq 17), and the
+first difference dd = P0 + Pu u + Pv v; the stepper then adds dd and 2A per pixel (eq 22).
+Here every product's operands are rounded to M-bit signed mantissas: u and v with M - 2
+fraction bits (they lie in [0, 1] at a pixel inside the triangle), and each group of
+coefficients, (a..f), t1, t2, (P0, Pu, Pv) and 2A, at the exponent of its largest magnitude
+on that triangle. Products and sums are exact (the accumulators are adders, as wide as the
+bound needs). The error at each fragment is against the same float model's Phi, in LSBs of
+the output (2^-14); the tests' bound is one LSB after rounding, so half an LSB is what the
+arithmetic may spend.
+
+Why the exponent can be per triangle: along x, the barycentric u changes by y2 / Omega a
+pixel and v by y1 / Omega, both at most 1 / W, W = |Omega| / y2 the triangle's widest
+horizontal chord (at the middle vertex's row); so dd scales as 1 / W and 2A as 1 / W^2,
+while a span is at most W + 1 pixels long. A triangle with W < 1 (a sliver across the rows)
+has spans of one pixel: its dd and 2A are never used.
+
+    python -m flows.bfp      (a minute: the driver and numpy only)"""
+import numpy as np
+
+from golden import raster as R, random_triangles, TYPICAL_SIZE
+from golden import quadratic as q
+from hdl.setup_unit.formats import VALUE, parse_modes
+from scene import driver as S
+from sim.verilog import SCENES
+
+MESHES = [("default torus, 12 x 12 segments", "default", None),
+          ("wuson (OBJ)", "wuson", None),
+          ("torus, 64 x 64 segments, 256 x 256", "default", [64, 64])]
+MANTISSAS = (18, 20, 22, 25)
+
+
+def _quant(x, exp, m):
+    """``x`` rounded to an m-bit signed mantissa at the exponent ``exp`` (|x| < 2^exp)."""
+    step = 2.0 ** (exp - (m - 1))
+    return np.rint(x / step) * step
+
+
+def _exp(*groups):
+    """The group's exponent per triangle: the least e with every |x| < 2^e."""
+    top = np.max(np.abs(np.stack(groups)), 0)
+    return np.floor(np.log2(np.maximum(top, 2.0 ** -60))) + 1
+
+
+def errors(inputs, m, screen_bits, sub_bits, modes):
+    """Per fragment and quadratic channel, |Phi emulated - Phi float| in LSBs (2^-14), and
+    per triangle the widest chord W."""
+    channels = len(modes)
+    x, y = R._vertices(inputs)
+    tri, px, py = R.coverage(x, y, sub_bits, screen_bits)
+    st = R.sorted_triangles(inputs, channels, sub_bits)
+    np.seterr(divide="ignore", invalid="ignore")           # culled triangles: Omega = 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        omega = q.omega(st["x1"], st["y1"], st["x2"], st["y2"])
+        width = np.abs(omega) / st["y2"]
+        ux, vx = st["y2"] / omega, -st["y1"] / omega          # du/dx, dv/dx a pixel
+    # each row's first fragment (the RTL's span start), its (u, v), and each pixel's offset
+    first = np.r_[True, (tri[1:] != tri[:-1]) | (py[1:] != py[:-1])]
+    start = np.maximum.accumulate(np.where(first, np.arange(len(tri)), 0))
+    i = px - px[start]
+    X0 = px[start] + 0.5 - st["x0"][tri]
+    Y0 = py[start] + 0.5 - st["y0"][tri]
+    g = {k: st[k][tri] for k in ("x1", "y1", "x2", "y2")}
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u, v = q.uv_of(g["x1"], g["y1"], g["x2"], g["y2"], X0, Y0)
+        ue, ve = q.uv_of(g["x1"], g["y1"], g["x2"], g["y2"], px + 0.5 - st["x0"][tri],
+                         py + 0.5 - st["y0"][tri])
+    uq, vq = (np.rint(w * 2.0 ** (m - 2)) * 2.0 ** -(m - 2) for w in (u, v))
+    out = []
+    for ch, mode in enumerate(modes):
+        if mode == "linear":
+            continue
+        I = [st["values"][ch][:, k] for k in range(3)]
+        coef = R.channel_uv(mode, I, st["e"])                       # (n, 6): a..f
+        a, b, c, d, e, f = coef.T
+        A = a * ux * ux + b * vx * vx + c * ux * vx
+        Pu, Pv, P0 = 2 * a * ux + c * vx, 2 * b * vx + c * ux, A + d * ux + e * vx
+        e0, e1, e2 = _exp(a, b, c, d, e, f), _exp(P0, Pu, Pv), _exp(2 * A)
+        qa, qb, qc, qd, qe, qf = (_quant(z, e0, m)[tri] for z in (a, b, c, d, e, f))
+        t1 = qd + qa * uq + qc * vq
+        t2 = qe + qb * vq
+        et = _exp(t1, t2)
+        phi0 = qf + uq * _quant(t1, et, m) + vq * _quant(t2, et, m)
+        dd = (_quant(P0, e1, m)[tri] + _quant(Pu, e1, m)[tri] * uq
+              + _quant(Pv, e1, m)[tri] * vq)
+        phi = phi0 + i * dd + i * (i - 1) / 2 * _quant(2 * A, e2, m)[tri]
+        exact = q.eval_uv(coef[tri], ue, ve)
+        out.append(np.abs(phi - exact) / VALUE.lsb)
+    err = np.max(out, 0) if out else np.zeros(len(tri))
+    return tri, err, width
+
+
+def _scene_inputs(name, segments):
+    scene = S.load(SCENES / f"{name}.toml")
+    if segments:
+        scene["mesh"]["segments"] = segments
+    prep = S.prepare(scene)
+    p = prep["pipeline"].raster.params
+    return prep["inputs"], p["screen_bits"], p["sub_bits"], parse_modes(p["modes"],
+                                                                         p["channels"])
+
+
+def main():
+    cases = [(label, *_scene_inputs(name, seg)) for label, name, seg in MESHES]
+    for bits in (8, 10):               # random triangles as the raster's tests draw them
+        rand = random_triangles(np.random.default_rng(49), 3000, screen_bits=bits,
+                                sub_bits=4, channels=2, size=TYPICAL_SIZE)
+        cases.append((f"random, {1 << bits} x {1 << bits} (golden.random_triangles)", rand,
+                      bits, 4, ("xshading", "xshading")))
+        big = random_triangles(np.random.default_rng(50), 300, screen_bits=bits, sub_bits=4,
+                               channels=2)
+        cases.append((f"random screen-sized, {1 << bits} x {1 << bits}", big, bits, 4,
+                      ("xshading", "xshading")))
+    print("| triangles | drawn | W < 1 (slivers) | "
+          + " | ".join(f"max error, {m} bits (LSB)" for m in MANTISSAS)
+          + " | triangles over 1/2 LSB at 18 bits |")
+    print("| --- | --- | --- | " + " | ".join("---" for _ in MANTISSAS) + " | --- |")
+    for label, inputs, sb, sub, modes in cases:
+        cells, over = [], None
+        for m in MANTISSAS:
+            tri, err, width = errors(inputs, m, sb, sub, modes)
+            cells.append(f"{err.max():.3g}" if len(err) else "-")
+            if m == MANTISSAS[0]:
+                bad = np.unique(tri[err > 0.5])
+                drawn = np.unique(tri)
+                over = f"{len(bad)} of {len(drawn)}"
+                slivers = f"{(width[drawn] < 1).mean() * 100:.1f} %"
+        print(f"| {label} | {len(drawn):,} | {slivers} | " + " | ".join(cells)
+              + f" | {over} |")
+
+
+if __name__ == "__main__":
+    main()
