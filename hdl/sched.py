@@ -11,7 +11,9 @@ a division takes ``ceil((q_bits + 1) / ii)`` dividers in turn. The copies of one
 multiplier's products share registers where their lives (write to last read) do not
 overlap (:meth:`Schedule._pool`): a copy is the product's sum register, so a shared one needs
 no multiplexer, only its write enables ORed.
-Everything advances with one enable, so a stalled schedule holds every value.
+Everything advances with one enable, so a stalled schedule holds every value. The schedule
+sees which registers a value reads, and rebuilds it with late copies, through its record of
+operands (:mod:`hdl.term`): its registers are terms, and so is every value built from them.
 
 A product: operands are registered (the DSP's input registers), the four 18 x 18 partial
 products of two 35-bit signed operands registered (one MULT18X18D each), their sum registered;
@@ -20,12 +22,10 @@ the result is written at ``issue + MUL_LAT`` (one more with ``mux_groups``) and 
 clock later.
 """
 from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
-from amaranth.hdl._ast import Concat, Operator, SignalDict, SignalSet, Slice  # Signals
-# are not hashable; the node types tell an operand's wiring from its logic
-from amaranth.hdl._xfrm import ValueTransformer     # late copies put into an expression
 from amaranth.lib.memory import Memory
 
 from .dsp import mult18
+from .term import Term, term
 
 __all__ = ["Schedule", "OPERAND", "MUL_LAT"]
 
@@ -36,7 +36,42 @@ MUL_LAT = 4           # issue (operands muxed) -> operand regs -> partial produc
 
 
 def _deps(value):
-    return Value.cast(value)._rhs_signals()
+    return term(value).leaves()
+
+
+def _reg(x):
+    """A register, given as itself or as its term."""
+    return x.reg if isinstance(x, Term) else x
+
+
+class _Regs:
+    """Registers to values, by identity (Amaranth values are not hashable)."""
+
+    def __init__(self):
+        self._d = {}
+
+    def __setitem__(self, reg, value):
+        reg = _reg(reg)
+        self._d[id(reg)] = (reg, value)
+
+    def __getitem__(self, reg):
+        return self._d[id(_reg(reg))][1]
+
+    def get(self, reg, default=None):
+        hit = self._d.get(id(_reg(reg)))
+        return default if hit is None else hit[1]
+
+    def __contains__(self, reg):
+        reg = _reg(reg)
+        return reg is not None and id(reg) in self._d
+
+    def items(self):
+        return list(self._d.values())
+
+    def setdefault(self, reg, value):
+        if reg not in self:
+            self[reg] = value
+        return self[reg]
 
 
 class Schedule:
@@ -60,14 +95,14 @@ class Schedule:
         self.mux_groups, self.lat = mux_groups, MUL_LAT + (1 if mux_groups else 0)
         self.start = Signal(name=f"{name}_start")      # the caller drives it: a job starts
         self.phase = [self.start]
-        self.ready = SignalDict()                        # register -> first offset it is valid
-        self.written = SignalDict()                      # register -> offset written
-        self.reads = SignalDict()                        # register -> last offset read
+        self.ready = _Regs()                             # register -> first offset it is valid
+        self.written = _Regs()                           # register -> offset written
+        self.reads = _Regs()                             # register -> last offset read
         self.mults = [[] for _ in range(mults)]          # per multiplier: (offset, a, b)
         self.narrow = [[] for _ in range(narrow)]        # the same, 18 x 18
         self.fits = 0                                    # products a narrow one can take
         self.length = 1                                  # offsets used
-        self.outputs = SignalSet()                       # read by the next stage, not here
+        self.outputs = _Regs()                           # read by the next stage, not here
         self.pooled = []                                 # (register, value, offset): _pool
         self.host, self.guests = host, {}                # guests: index -> operand terms
         self.share = share
@@ -91,14 +126,14 @@ class Schedule:
             self.m.d.sync += r.eq(_or_tree([self.at(k) for k in range(self.length - 1)]))
         return r
 
-    def _when(self, *values, after=0):
+    def when(self, *values, after=0):
         k = after
         for v in values:
             for s in _deps(v):
                 k = max(k, self.ready.get(s, 0))
         return k
 
-    def _read(self, k, *values):
+    def read(self, k, *values):
         for v in values:
             for s in _deps(v):
                 if s in self.ready:
@@ -114,7 +149,13 @@ class Schedule:
                 self.m.d.sync += reg.eq(value)
         self.ready[reg], self.written[reg] = k + 1, k
         self.length = max(self.length, k + 1)
-        return reg
+        return self._leaf(reg)
+
+    def _leaf(self, reg):
+        """The one term of a register of this schedule's (so that copies compare by ``is``)."""
+        if not hasattr(self, "_leaves"):
+            self._leaves = _Regs()
+        return self._leaves.setdefault(reg, Term.leaf(reg))
 
     def input(self, name, value, shape=None, en=None):
         """``value`` (stable while ``start`` is high) captured at the job's start; or, with
@@ -138,34 +179,34 @@ class Schedule:
 
     def let(self, name, value, shape=None, after=0):
         """A register of ``value``, written as soon as its operands are ready."""
-        k = self._when(value, after=after)
-        value = self._late_at(value, k)
-        self._read(k, value)
+        k = self.when(value, after=after)
+        value = self.late_at(value, k)
+        self.read(k, value)
         return self._write(name, value, k, shape)
 
     def apply(self, name, fn, *regs, after=0):
         """``let(name, fn(*regs))``, each register read from a copy still valid then."""
-        k = self._when(*regs, after=after)
+        k = self.when(*regs, after=after)
         return self.let(name, fn(*(self.late(r, k) for r in regs)), after=k)
 
     def lets(self, after=0, **values):
         """Several registers written at one offset (the latest operand's)."""
-        k = self._when(*values.values(), after=after)
-        values = {n: self._late_at(v, k) for n, v in values.items()}
-        self._read(k, *values.values())
+        k = self.when(*values.values(), after=after)
+        values = {n: self.late_at(v, k) for n, v in values.items()}
+        self.read(k, *values.values())
         return {n: self._write(n, v, k) for n, v in values.items()}
 
     def mul(self, name, a, b, post=None, shape=None, after=0, shifted=False):
         """``post(a * b)`` in a register (``a``, ``b``: signed, at most OPERAND bits)."""
         # an operand with logic in it (a negation, a sum) is registered first: the operand
         # multiplexer's inputs are wiring only, so no carry chain runs into it
-        a, b = (Value.cast(x) if _wiring(x) else self.let(f"{name}_{s}", x)
+        a, b = (term(x) if _wiring(x) else self.let(f"{name}_{s}", x)
                 for x, s in ((a, "a"), (b, "b")))
         natural = len(a) + len(b)
         for x in (a, b):
             if len(x) + (0 if x.shape().signed else 1) > OPERAND:
                 raise ValueError(f"{self.name}.{name}: operand of {len(x)} bits")
-        k = self._when(a, b, after=after)
+        k = self.when(a, b, after=after)
         fits = not shifted and all(len(x) + (0 if x.shape().signed else 1) <= NARROW
                                    for x in (a, b))
         self.fits += fits
@@ -189,9 +230,9 @@ class Schedule:
                 continue
             break
         if self.ii is not None:
-            a, b = self._late_at(a, k), self._late_at(b, k)
+            a, b = self.late_at(a, k), self.late_at(b, k)
             unit[-1] = (k, a, b)
-        self._read(k, a, b)
+        self.read(k, a, b)
         if narrow:
             total, lat = self._total(idx, True), self.lat - 2
         else:
@@ -199,7 +240,7 @@ class Schedule:
         if shifted:                       # the amount is read with the product's sum
             amount = self.late(self.shift[0], k + self.lat)
             total, lat = self._shifted(idx, amount, k + self.lat), self.lat + 2
-            self._read(k + self.lat, amount)
+            self.read(k + self.lat, amount)
         self.length = max(self.length, k + lat + 1)
         if post:
             return self._write(name, post(total), k + lat, shape, pool=True)
@@ -253,16 +294,17 @@ class Schedule:
     def rom(self, name, lut, addr):
         """``lut[addr]``: a synchronous read, then its own register (the RAM's clock to output
         is never in series with logic)."""
-        k = self._when(addr)
-        addr = self._late_at(addr, k)
-        self._read(k, addr)
+        k = self.when(addr)
+        addr = self.late_at(addr, k)
+        self.read(k, addr)
         mem = Memory(shape=unsigned(lut.fmt.width), depth=len(lut.contents),
                      init=[int(v) & ((1 << lut.fmt.width) - 1) for v in lut.contents])
         self.m.submodules[f"{self.name}_{name}_rom"] = mem
         port = mem.read_port()
         self.m.d.comb += [port.addr.eq(addr), port.en.eq(self.en & self.at(k))]
         self.ready[port.data] = k + 1
-        data = port.data.as_signed() if lut.fmt.signed else port.data
+        data = self._leaf(port.data)
+        data = data.as_signed() if lut.fmt.signed else data
         return self.let(name, data)
 
     def divide(self, name, num, den, q_bits):
@@ -271,25 +313,25 @@ class Schedule:
         With ``ii``: ``ceil((q_bits + 1) / ii)`` dividers, each job taking the next in turn,
         each with its own copy of ``den``; with more than one, the finished divider's result
         is copied to a register of its own."""
-        k = self._when(num, den)
+        k = self.when(num, den)
         n = f"{self.name}_{name}"
         if self.ii is None:
-            self._read(k + q_bits, den)
+            self.read(k + q_bits, den)
             q, rem = self._divider(n, num, den, self.at(k), self.at(k + q_bits), q_bits)
             done = k + q_bits
             self.ready[q] = self.ready[rem] = done + 1
             self.written[q] = self.written[rem] = done
             self.length = max(self.length, done + 1)
-            return q, rem[:len(den)]
-        num, den = self._late_at(num, k), self._late_at(den, k)
-        self._read(k, num, den)
+            return self._leaf(q), self._leaf(rem)[:len(den)]
+        num, den = self.late_at(num, k), self.late_at(den, k)
+        self.read(k, num, den)
         copies = -(-(q_bits + 1) // self.ii)
         if copies == 1:                 # valid until the next job loads it, ii clocks on
             q, rem = self._divider(n, num, den, self.at(k), self.at(k + q_bits), q_bits, True)
             self.ready[q] = self.ready[rem] = k + q_bits + 1
             self.written[q] = self.written[rem] = k
             self.length = max(self.length, k + q_bits + 1)
-            return q, rem[:len(den)]
+            return self._leaf(q), self._leaf(rem)[:len(den)]
         # one-hot turns: the divider the next job loads, the one that finishes next
         turn = [Signal(name=f"{n}_turn{c}", init=c == 0) for c in range(copies)]
         fin = [Signal(name=f"{n}_fin{c}", init=c == 0) for c in range(copies)]
@@ -307,6 +349,7 @@ class Schedule:
 
     def _divider(self, n, num, den, load, stop, q_bits, own_den=False):
         """One divider: loaded at ``load``, a quotient bit a clock until ``stop``."""
+        num, den = Value.cast(num), Value.cast(den)        # hardware: no term needed
         rem = Signal(len(den) + 1, name=f"{n}_rem", reset_less=True)
         low = Signal(q_bits, name=f"{n}_low", reset_less=True)
         q = Signal(q_bits, name=f"{n}_q", reset_less=True)
@@ -329,24 +372,26 @@ class Schedule:
         return q, rem
 
     def late(self, reg, k):
-        """``reg``, or a copy of it that is still valid at offset ``k`` (with ``ii``)."""
+        """``reg`` (a term), or a copy of it that is still valid at offset ``k`` (with
+        ``ii``)."""
+        reg = term(reg)
         if self.ii is None or reg not in self.written or k <= self.written[reg] + self.ii:
             return reg
         c = max(k - self.ii, self.ready[reg])
         if not hasattr(self, "_late"):
-            self._late = SignalDict()
+            self._late = _Regs()
         copies = self._late.setdefault(reg, {})
         if c not in copies:
             src = self.late(reg, c)
-            self._read(c, src)
-            copies[c] = self._write(f"{reg.name[len(self.name) + 1:]}_at{c}", src, c)
+            self.read(c, src)
+            copies[c] = self._write(f"{reg.reg.name[len(self.name) + 1:]}_at{c}", src, c)
         return copies[c]
 
-    def _late_at(self, value, k):
+    def late_at(self, value, k):
         """``value`` with each register replaced by its copy still valid at offset ``k``."""
         if self.ii is None:
             return value
-        return _Late(self, k)(Value.cast(value))
+        return term(value).map(lambda reg: self.late(reg, k))
 
     @property
     def aligned(self):
@@ -390,7 +435,8 @@ class Schedule:
         """The registers in ``values`` are read by the next stage, after the job: never
         shared (call before :meth:`finish`)."""
         for v in values:
-            self.outputs.update(_deps(v))
+            for reg in _deps(v):
+                self.outputs[reg] = True
 
     def finish(self):
         if self.ii is not None:
@@ -496,29 +542,10 @@ class Schedule:
                 raise AssertionError(f"{reg.name}: written at {w}, read at {r}, ii {self.ii}")
 
 
-class _Late(ValueTransformer):
-    def __init__(self, sc, k):
-        self.sc, self.k = sc, k
-
-    def on_Signal(self, value):
-        return self.sc.late(value, self.k)
-
-
 def _wiring(value):
     """``value`` is registers and constants, sliced, concatenated, cast or shifted by
-    constants: no logic."""
-    v = Value.cast(value)
-    if isinstance(v, (Signal, Const)):
-        return True
-    if isinstance(v, Slice):
-        return _wiring(v.value)
-    if isinstance(v, Concat):
-        return all(_wiring(p) for p in v.parts)
-    if isinstance(v, Operator) and v.operator in ("s", "u"):
-        return _wiring(v.operands[0])
-    if isinstance(v, Operator) and v.operator in ("<<", ">>"):
-        return isinstance(v.operands[1], Const) and _wiring(v.operands[0])
-    return False
+    constants: no logic (its term says)."""
+    return term(value).wiring
 
 
 def _key(value):

@@ -18,6 +18,7 @@ import pytest
 from golden import angular, bump as bumps, fenney
 from scene import driver as S
 from scene.pipeline import ScenePipeline, units_in
+from scene.stage import Stage
 from sim.simulators import available
 
 from .conftest import longest_empty_run
@@ -82,7 +83,7 @@ def _within_interval(prep, frag, ch, out):
     """Every RTL colour between the model's at the ends of its stage's interval (the bound
     above: ``Stage.interval``, through ``scene.models.within``); the RTL's colours."""
     rtl = np.stack([out[c] for c in "rgb"], -1).astype(int)
-    assert S.interval(prep, frag, ch) is not None
+    assert any(type(s).interval is not Stage.interval for s in prep["pipeline"].stages)
     bad = np.flatnonzero(~S.within(prep, frag, ch, rtl))
     assert not len(bad), (f"{len(bad)} fragments outside the bound; first {int(bad[0])}: "
                           f"RTL {rtl[bad[0]]}")

@@ -85,3 +85,26 @@ def test_the_reader_sees_imports():
     g = graph()
     assert "hdl.units" in g["scene.pipeline"] and "golden.raster" in g["scene.stages.raster"]
     assert "scene.driver" in g["sim.render"] or "scene" in g["sim.render"]
+
+
+def test_no_private_amaranth_api():
+    """Nothing imports a private Amaranth module (``amaranth.hdl._ast`` and the like) or calls
+    a private method of an Amaranth value (``_rhs_signals``): the schedule keeps its own record
+    of operands (``hdl/term.py``). Read from the syntax tree: every import, and every
+    attribute of the form ``._name`` on anything whose name was imported from amaranth."""
+    bad = []
+    for name, path in modules().items():
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("amaranth"):
+                mods = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                mods = [a.name for a in node.names if a.name.startswith("amaranth")]
+            else:
+                mods = []
+            bad += [f"{name}: imports {m}" for m in mods
+                    if any(p.startswith("_") for p in m.split(".")[1:])]
+            if isinstance(node, ast.Attribute) and node.attr in ("_rhs_signals",
+                                                                 "_lhs_signals"):
+                bad.append(f"{name}: calls {node.attr}")
+    assert not bad, bad

@@ -14,11 +14,12 @@ docs/quadratic.md.
 """
 from dataclasses import dataclass
 
-from amaranth.hdl import Cat, Const, Mux, signed
+from amaranth.hdl import Const, signed
 
 from .. import arith
 from ..fixed import Field, s, u
 from ..sched import OPERAND, Schedule
+from ..term import Cat, Mux, Term, term
 from .formats import EXACT_G_MAX, VALUE, coord, edge_names, parse_groups, parse_modes
 
 RSQRT_ITERS = 2    # Newton-Raphson steps of the exact mid-edges' 1/sqrt (seed error 2**-9)
@@ -146,7 +147,8 @@ class Setup:
             xle = c["xlt_hi"] | (c["xeq_hi"] & (c["xlt_lo"] | c["xeq_lo"]))
             lt[a, b] = sc.let(f"lt{a}{b}", ylt | (yeq & xle))
             lt[b, a] = ~lt[a, b]
-        rank = sc.lets(**{f"rank{k}": sum((lt[o, k] for o in range(3) if o != k), Const(0, 2))
+        rank = sc.lets(**{f"rank{k}": sum((lt[o, k] for o in range(3) if o != k),
+                                              term(Const(0, 2)))
                           for k in range(3)})
         rank = [rank[f"rank{k}"] for k in range(3)]
 
@@ -223,7 +225,7 @@ class Setup:
         out.update(cull=flags["cull"], left_long=flags["left_long"],
                    # the walker has rows to walk: registered here, not compared on its load
                    rows=sc.let("rows", ~flags["cull"] & (r["j0"] < r["j1"])))
-        norm = sc.lets(sh=arith.leading_one(flags["mag"], W))
+        norm = sc.lets(sh=Term.call(arith.leading_one, flags["mag"], W))
         norm["lz"] = sc.let("lz", W - 1 - norm["sh"], shape=range(W))
         sh = norm["sh"]
         sc.shift = self.shift(sh)
@@ -253,7 +255,7 @@ class Setup:
         over = sc.lets(**{f"{k}_{n}": test for k, x in raw.items()
                           for n, test in (("hi", x > hi), ("lo", x < lo))})
         alpha = {k: sc.let(k, Mux(over[f"{k}_hi"], hi, Mux(over[f"{k}_lo"], lo, x))
-                           .as_signed()[:OPERAND].as_signed(), after=sc._when(*over.values()))
+                           .as_signed()[:OPERAND].as_signed(), after=sc.when(*over.values()))
                  for k, x in raw.items()}
         if in_turn:
             out.update(self._tracks(sc, r, out, xt, yt))
@@ -300,7 +302,7 @@ class Setup:
         drop = max(0, W - OPERAND + 1)
         for k in range(self.recip_iters):
             mr = sc.mul(f"mr{k}", nop, rcp, post=lambda p: (p >> (W - 1 - drop))[:R + 2])
-            t = sc.let(f"t{k}", (Const(2 << R, signed(R + 3)) - mr)[:R + 2])    # in (0, 2)
+            t = sc.let(f"t{k}", (term(Const(2 << R, signed(R + 3))) - mr)[:R + 2])    # in (0, 2)
             rcp = sc.mul(f"r{k}", rcp, t, post=lambda p: (p >> R)[:R + 1])
         return rcp
 
@@ -386,7 +388,7 @@ class Setup:
             for it in range(RSQRT_ITERS):
                 y2 = sc.mul(f"{e}_yy{it}", y, y, post=lambda p: (p >> FG)[:FG + 1])
                 my = sc.mul(f"{e}_my{it}", y2, m, post=lambda p: p >> (Wm - 2))
-                t = sc.let(f"{e}_t{it}", (Const(3 << FG, signed(FG + 4)) - my)[:FG + 2])
+                t = sc.let(f"{e}_t{it}", (term(Const(3 << FG, signed(FG + 4))) - my)[:FG + 2])
                 y = sc.mul(f"{e}_y{it}", y, t, post=lambda p: (p >> (FG + 1))[:FG + 1])
             gg = sc.let(f"{e}_gg", (y << (pre[f"{e}_sh"] >> 1)) >> 5)  # y 2**(sh/2-2), FG-3
             g[f"g{e[1:]}"] = sc.let(f"g{e[1:]}", Mux(pre[f"{e}_z"] | (gg > gmax), gmax,

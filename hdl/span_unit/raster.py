@@ -221,7 +221,7 @@ class Raster(Unit):
             rslot = Signal(name="cs_rslot")
             with m.If(done & src_ready):              # the walker takes the triangle
                 m.d.sync += rslot.eq(~rslot)
-            go = max(sc._when(*(coef[k] for k in self.setup.job_inputs)), sc.last_issue + 1)
+            go = max(sc.when(*(coef[k] for k in self.setup.job_inputs)), sc.last_issue + 1)
             mem, a2, written, t = channel_engine(m, self.setup, coef, sc.at(go), ~rslot,
                                                  platform, in_turn, host=(sc, 0))
             coef.update(a2)

@@ -22,10 +22,11 @@ Four parts, each a stream stage with backpressure:
 - ``stepper``: one fragment per clock, two additions per quadratic channel per pixel:
   Phi += d, d += 2A (one for a linear channel, whose 2A is 0).
 """
-from amaranth.hdl import Cat, Const, Mux, Signal, signed, unsigned
+from amaranth.hdl import Const, Signal, Value, signed, unsigned
 from amaranth.lib.memory import Memory
 
 from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule, _or_tree
+from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
 
 __all__ = ["Link", "walker", "walker_constants", "row_engine", "row_engine_serial", "row_products",
@@ -74,10 +75,11 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, fla
     to_j1, to_jm = (Signal(signed(w.wrow + 1), name=f"w_{k}") for k in ("to_j1", "to_jm"))
     left_long = Signal()
     keep = [] if current else walker_constants(channels, flat, in_memory)
-    held = current or {k: Signal.like(src[k], name=f"w_{k}") for k in keep}
+    held = current or {k: Signal.like(Value.cast(src[k]), name=f"w_{k}") for k in keep}
     edge = {}
     for e in ("l", "s", "t"):
-        edge[e] = {k: Signal.like(src[f"{e}_{k}"], name=f"w_{e}_{k}") for k in "iqdn"}
+        edge[e] = {k: Signal.like(Value.cast(src[f"{e}_{k}"]), name=f"w_{e}_{k}")
+                   for k in "iqdn"}
         edge[e]["r"] = Signal(signed(len(src[f"{e}_n"]) + 1), name=f"w_{e}_r",   # r - d
                               reset_less=True)
     # numerator tracks: the left edge's first pixel (E), column 0 (B); their steps
@@ -160,7 +162,8 @@ def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, fla
     row = {"j": j, "xl": Mux(left_long, edge["l"]["i"], edge["s"]["i"]),
            "xr": Mux(left_long, edge["s"]["i"], edge["l"]["i"]),
            **{k: tr[k] for k in ("E_u", "E_v", "B_u", "B_v")}}
-    buf = {k: Signal.like(x, name=f"wb_{k}", reset_less=True) for k, x in row.items()}
+    buf = {k: Signal.like(Value.cast(x), name=f"wb_{k}", reset_less=True)
+           for k, x in row.items()}
     _, _, _, accept_b = control("_buf")
     size = 1 << w.screen_bits                  # [xl, xr) clamped to the screen is not empty
     with m.If(accept_b):
@@ -218,7 +221,7 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
         m.submodules[f"row_ends{ch}"] = mem
         wr, rd = mem.write_port(), mem.read_port(domain="comb")
         addr = sc.late(slot, k)
-        sc._read(k, addr)
+        sc.read(k, addr)
         m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*vals.values())), wr.en.eq(sc.start),
                      rd.addr.eq(addr)]
         return {n[len(f"c{ch}_"):]: x for n, x in _fields(rd.data, vals).items()}
@@ -246,14 +249,15 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
         shift = w.FQ + w.FT - w.FI
         uvt = sc.let(f"uvt{ch}", (ut + vt) >> shift)
         if mode == "linear":          # d = P0: carried (``early``)
-            k = sc._when(uvt)
+            k = sc.when(uvt)
             end_vals = read_at(ch, k)
         else:
             puv = sc.let(f"puv{ch}", (pu + pv) >> (FP - w.FI))
-            k = sc._when(uvt, puv)
+            k = sc.when(uvt, puv)
             end_vals = read_at(ch, k)
-            out[f"d{ch}"] = sc.let(f"d{ch}", end_vals["p0"] + puv, after=k)
-        out[f"phi{ch}"] = sc.let(f"phi{ch}", (end_vals["f"] << (w.FI - w.FO)) + uvt, after=k)
+            out[f"d{ch}"] = sc.let(f"d{ch}", term(end_vals["p0"]) + puv, after=k)
+        out[f"phi{ch}"] = sc.let(f"phi{ch}", (term(end_vals["f"]) << (w.FI - w.FO)) + uvt,
+                                 after=k)
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
     out = _outputs(sc, w, v, out, end, {f"phi{ch}": _half(w, p) for ch, p in
                                         enumerate(precision)},
@@ -324,7 +328,7 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     d = (sc.apply("d", lambda p0, x: p0 + x, v["p0"], sc.let("puv", (pu + pv) >> (FP - w.FI)))
          if quad else v["p0"])
     phi = sc.apply("phi", lambda f, x: (f << (w.FI - w.FO)) + x, v["f"], uvt)
-    end = sc._when(phi, d)
+    end = sc.when(phi, d)
     halves = sorted(set(precision))
     half = (_half(w, halves[0]) if len(halves) == 1 else      # the job's channel's
             (v["sel"], lambda sel: _or_tree([Mux(sel[c], _half(w, p), 0)
@@ -332,7 +336,7 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     out = _outputs(sc, w, v, {"phi": phi, "d": d}, end, {"phi": half})
     at = end + 1                               # the outputs' registers are valid
     addr, chan = sc.late(v["slot"], at), sc.late(v["sel"], at)
-    sc._read(at, addr, chan)
+    sc.read(at, addr, chan)
     en = sc.at(at)
     writes = [(f"row_queue_c{c}", {f"phi{c}": out["phi"] >> cut[c], f"d{c}": out["d"] >> cut[c]},
                en & chan[c], addr) for c in range(channels)]
@@ -390,7 +394,7 @@ def _outputs(sc, w, v, vals, end, halves, cuts=None):
     fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
     fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
     out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
-    sc.outputs.update(out.values())
+    sc.keep(*out.values())
     return out
 
 
@@ -490,10 +494,10 @@ def channel_engine(m, setup, src, go, wslot, platform=None, mults=1, host=None):
     v = sc.inputs(vals, copy=sc.aligned_copy)
     out = setup.channel_job(sc, v)
     keys = ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")
-    end = sc._when(*out.values())
-    data = {k: sc._late_at(out[k], end) for k in (*keys, "a2")}
+    end = sc.when(*out.values())
+    data = {k: sc.late_at(out[k], end) for k in (*keys, "a2")}
     slot, idx, chan = (sc.late(v[k], end) for k in ("slot", "index", "sel"))
-    sc._read(end, *data.values(), slot, idx, chan)
+    sc.read(end, *data.values(), slot, idx, chan)
     en = sc.at(end)
     bits = max(1, (channels - 1).bit_length())
     words = {k: data[k] for k in keys}
@@ -504,7 +508,8 @@ def channel_engine(m, setup, src, go, wslot, platform=None, mults=1, host=None):
                  wr.en.eq(en)]
     a2 = {}
     for c in range(channels):
-        a2[f"c{c}_a2"] = r = Signal.like(data["a2"], name=f"cs_a2_{c}", reset_less=True)
+        a2[f"c{c}_a2"] = r = Signal.like(Value.cast(data["a2"]), name=f"cs_a2_{c}",
+                                         reset_less=True)
         with m.If(en & chan[c]):
             m.d.sync += r.eq(data["a2"])
     last = Signal(name="cs_written")
@@ -549,8 +554,8 @@ def setup_queue(m, sc, values, space, take, current=(), depth=15):
     slot = sc.input("sq_slot", slots)
     keep = {k: x for k, x in values.items() if not isinstance(x, Const)}
     groups = []
-    for k in sorted(keep, key=lambda k: (k in current, sc._when(keep[k]))):
-        at = sc._when(keep[k])
+    for k in sorted(keep, key=lambda k: (k in current, sc.when(keep[k]))):
+        at = sc.when(keep[k])
         if not groups or k in current and not groups[-1][2] or at >= groups[-1][0] + sc.ii:
             groups.append([at, {}, k in current])
         groups[-1][1][k] = keep[k]
@@ -558,13 +563,13 @@ def setup_queue(m, sc, values, space, take, current=(), depth=15):
     out = {k: x for k, x in values.items() if isinstance(x, Const)}
     offset = 0
     for g, (_, vals, now) in enumerate(groups):
-        at = max(sc._when(x) for x in vals.values())
+        at = max(sc.when(x) for x in vals.values())
         offset = max(offset, at)
         mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
         m.submodules[f"setup_queue{g}"] = mem
         wr, rd = mem.write_port(), mem.read_port(domain="comb")
-        data = sc._late_at(Cat(*vals.values()), at)
-        sc._read(at, data)
+        data = sc.late_at(Cat(*vals.values()), at)
+        sc.read(at, data)
         m.d.comb += [wr.addr.eq(sc.late(slot, at)), wr.data.eq(data), wr.en.eq(sc.at(at)),
                      rd.addr.eq(cur if now else rptr)]
         out.update(_fields(rd.data, vals))
