@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """The registry of units: name -> component class. The CLI, the tests and the Verilog export
 all go through it, so a unit registered here is exported, linted, simulated and described."""
 from .illum_unit import (BumpPolar, FenneyDot, FenneyPolar, FenneyPower, FenneyXZ, Illum,

@@ -88,10 +88,11 @@ def test_the_reader_sees_imports():
 
 
 def test_no_private_amaranth_api():
-    """Nothing imports a private Amaranth module (``amaranth.hdl._ast`` and the like) or calls
-    a private method of an Amaranth value (``_rhs_signals``): the schedule keeps its own record
-    of operands (``hdl/term.py``). Read from the syntax tree: every import, and every
-    attribute of the form ``._name`` on anything whose name was imported from amaranth."""
+    """Nothing imports a private Amaranth module (``amaranth.hdl._ast`` and the like), calls a
+    private method of an Amaranth value (``_rhs_signals``: the schedule keeps its own record of
+    operands, ``hdl/term.py``) or sets Amaranth's private flags (``_MustUse__used``: a unit
+    never elaborated is made in a file whose first line tells Amaranth). Read from the syntax
+    tree: every import and every attribute."""
     bad = []
     for name, path in modules().items():
         tree = ast.parse(path.read_text())
@@ -104,7 +105,8 @@ def test_no_private_amaranth_api():
                 mods = []
             bad += [f"{name}: imports {m}" for m in mods
                     if any(p.startswith("_") for p in m.split(".")[1:])]
-            if isinstance(node, ast.Attribute) and node.attr in ("_rhs_signals",
-                                                                 "_lhs_signals"):
-                bad.append(f"{name}: calls {node.attr}")
+            if isinstance(node, ast.Attribute) and (
+                    node.attr in ("_rhs_signals", "_lhs_signals")
+                    or node.attr.startswith("_MustUse")):      # Amaranth's private flags
+                bad.append(f"{name}: uses {node.attr}")
     assert not bad, bad

@@ -258,5 +258,4 @@ def _products(*params):
 def _timing(items):
     unit = Raster(**dict(items))
     Fragment.get(unit, None)                     # elaborated whole: nothing left unused
-    unit._MustUse__used = True                   # (Amaranth's own flag) the top, too
     return unit._timing
