@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hdl.span_unit.plan import KNOBS
 from hdl.units import UNITS, describe, make_unit, parse_params
 
 from .cli_common import (UsageError, check_output_path, raster_knobs, read_fields,
@@ -254,13 +255,12 @@ def main(argv=None):
                         "(default), or in an on-chip RAM that the host loads (maps up to "
                         "128 x 128)")
     p.add_argument("--raster", metavar="KNOB=N,...",
-                   help="the raster's build knobs: setup_ii (a triangle every N clocks in the "
-                        "setup; 0, the default: one at a time), setup_mults, setup_narrow "
-                        "(its 35 x 35 and 18 x 18 multipliers), row_mults, row_serial (the row "
-                        "engine's channels in turn on N multipliers), setup_serial (the "
-                        "setup's channels in turn on N more; needs row_serial), vector_bits (the "
-                        "fraction bits of fenney_xz's vector channels, 4-14), recip, recip_iters "
-                        "(docs/quadratic.md); e.g. setup_ii=16,setup_mults=2,setup_narrow=2")
+                   help="the raster's build knobs (hdl/span_unit/plan.py, docs/quadratic.md): "
+                        + "; ".join(f"{k}: {what} ({lo}-{hi}, default {d})"
+                                    for k, (d, (lo, hi), what) in KNOBS.items())
+                        + "; recip, recip_iters: the setup's reciprocal; vector_bits: the "
+                          "fraction bits of fenney_xz's vector channels, 4-14; e.g. "
+                          "setup_ii=16,setup_mults=2,setup_narrow=2")
     p = sub.add_parser("check", help="golden vectors through the RTL, or your outputs against "
                                      "golden; one verdict per unit")
     p.add_argument("unit", nargs="?", choices=sorted(UNITS))

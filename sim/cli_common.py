@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from hdl.fixed import FieldError, check_arrays
+from hdl.span_unit.plan import KNOBS
 from hdl.units import ParamError
 from scene.driver import SceneError
 
@@ -128,8 +129,9 @@ def user_errors():
         sys.exit(0)
 
 
-RASTER_KNOBS = ("setup_ii", "setup_mults", "setup_narrow", "row_mults", "row_serial",
-                "setup_serial", "vector_bits", "recip", "recip_iters")
+# the raster plan's knobs (hdl.span_unit.plan), its reciprocal, and the vector channels'
+# fraction bits (fenney_xz's)
+RASTER_KNOBS = (*KNOBS, "recip", "recip_iters", "vector_bits")
 
 
 def raster_knobs(text):

@@ -283,7 +283,7 @@ def test_batch_trace_window(tmp_path):
 
 
 @pytest.mark.parametrize("arg,message", [
-    ("foo=1", "--raster: 'foo=1' is not KNOB=VALUE with a knob of setup_ii"),
+    ("foo=1", "--raster: 'foo=1' is not KNOB=VALUE with a knob of setup_mults, row_mults, setup_ii"),
     ("setup_ii=fast", "--raster: setup_ii must be a whole number, not 'fast'"),
     ("setup_narrow=9", "setup_narrow must be in 0..6"),
     ("setup_ii=8", "setup_ii=8 is too short: the setup's 54 products"),

@@ -22,11 +22,11 @@ from amaranth.lib.wiring import Out
 
 from ..sched import Schedule
 from ..setup_unit.formats import (MODES, PRECISIONS, flat_fields, fragment_fields,
-                                   parse_groups, parse_modes, parse_precision, triangle_fields)
-from ..setup_unit.setup import Setup
+                                   triangle_fields)
 from ..unit import Unit
-from .span import (Link, channel_engine, row_engine, row_engine_serial, row_products,
-                   row_queue, setup_queue, stepper, walker, walker_constants)
+from .plan import KNOBS, RANGES as PLAN_RANGES, RECIPS, RasterPlan
+from .span import (Link, channel_engine, row_engine, row_engine_serial, row_queue,
+                   setup_queue, stepper, walker, walker_constants)
 
 __all__ = ["Raster"]
 
@@ -35,81 +35,39 @@ class Raster(Unit):
     NAME = "raster"
     DOC = ("Triangle setup (X-shading / exact mid-edge / linear, one reciprocal) and the "
            "forward-difference span engine; many fragments per triangle")
+    # its parameters: the plan's (``hdl.span_unit.plan``), per channel as strings
     PARAMS = {"screen_bits": 10, "sub_bits": 4, "channels": 2, "modes": "xshading",
               "recip": "newton", "recip_iters": 2, "groups": "0", "flat": 0,
-              "setup_mults": 1, "row_mults": 0, "setup_ii": 0, "setup_narrow": 0,
-              "row_serial": 0, "setup_serial": 0, "precision": "14"}
-    RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "channels": (1, 12), "modes": MODES,
-              "recip": ("newton", "divide"), "recip_iters": (0, 3),
-              "groups": None,     # a string: parse_groups checks it
-              "flat": (0, 8),
-              "setup_mults": (1, 6),     # the setup's multipliers (35 x 35, four MULT18X18D each)
-              "row_mults": (0, 13),      # the row engine's; 0: one per channel and one more
-              "setup_ii": (0, 255),      # clocks between triangles in the setup; 0: one at a time
-              "setup_narrow": (0, 6),    # the setup's 18 x 18 multipliers (one MULT18X18D each)
-              "row_serial": (0, 9),      # >0: the row engine's channels in turn on this many
-              "setup_serial": (0, 3),    # >0: the setup's channels in turn on this many
+              **{k: d for k, (d, _, _) in KNOBS.items()}, "precision": "14"}
+    RANGES = {**PLAN_RANGES, "modes": MODES, "recip": RECIPS,
+              "groups": None,     # a string: the plan checks it
+              **{k: r for k, (_, r, _) in KNOBS.items()},
               "precision": PRECISIONS}   # each channel's fraction bits out (VALUE's 14 or fewer)
     PER_CHANNEL = ("modes", "groups", "precision")
     status_ports = {"busy": Out(1), "culled": Out(32)}
 
-    def validate(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups,
-                 flat, setup_mults, row_mults, setup_ii, setup_narrow, row_serial,
-                 setup_serial, precision):
-        parse_modes(modes, channels)
-        self.precision = parse_precision(precision, channels)
-        if setup_serial and (not row_serial or setup_ii or "exact" in parse_modes(modes,
-                                                                                 channels)):
-            raise ValueError(f"setup_serial={setup_serial} needs row_serial > 0 (its jobs read "
-                             f"the channels' constants in turn), setup_ii=0 and no exact "
-                             f"channel; here row_serial={row_serial}, setup_ii={setup_ii}, "
-                             f"modes={modes!r}")
-        if row_serial and row_mults:
-            raise ValueError(f"row_mults={row_mults} and row_serial={row_serial}: the row "
-                             f"engine is one or the other (row_mults=0 with row_serial)")
-        self.groups = max(parse_groups(groups, channels)) + 1
-        products = row_products(parse_modes(modes, channels))
-        if row_mults > products:           # fewer: shared, a longer row interval; more than
-            raise ValueError(f"row_mults must be at most the row engine's {products} products "
-                             f"a row (one each: a row a clock), not {row_mults}")
-        if setup_ii:
-            n, fits = _products(screen_bits, sub_bits, channels, modes, recip, recip_iters,
-                                groups)
-            if setup_narrow:                 # the narrow ones take every product that fits
-                if setup_ii * setup_narrow < fits:
-                    raise ValueError(f"setup_ii={setup_ii} is too short: the {fits} of the "
-                                     f"setup's products that fit 18 x 18 on setup_narrow="
-                                     f"{setup_narrow} take at least "
-                                     f"{-(-fits // setup_narrow)} clocks")
-                n -= fits
-            if setup_ii * setup_mults < n:
-                need, top = -(-n // setup_ii), self.RANGES["setup_mults"][1]
-                raise ValueError(f"setup_ii={setup_ii} is too short: the setup's {n} products "
-                                 f"on setup_mults={setup_mults} wide multiplier(s) take at least "
-                                 f"{-(-n // setup_mults)} clocks; at this interval they need "
-                                 f"setup_mults={need}"
-                                 + (f", more than the {top} allowed" if need > top else ""))
+    def validate(self, **params):
+        self.plan = RasterPlan.from_params(**params)
+        self.precision, self.groups = self.plan.precision, self.plan.groups
 
     @property
     def setup(self):
-        q = self.params
-        return Setup(q["screen_bits"], q["sub_bits"], q["channels"], q["modes"], q["recip"],
-                     q["recip_iters"], q["groups"])
+        return self.plan.setup
 
     @property
     def inputs(self):
-        q = self.params
-        return (triangle_fields(q["screen_bits"], q["sub_bits"], q["channels"], self.groups)
+        q = self.plan
+        return (triangle_fields(q.screen_bits, q.sub_bits, len(q.channels), q.groups)
                 + self.flat_fields)
 
     @property
     def outputs(self):
-        return fragment_fields(self.params["screen_bits"], self.params["channels"]) \
+        return fragment_fields(self.plan.screen_bits, len(self.plan.channels)) \
             + self.flat_fields
 
     @property
     def flat_fields(self):
-        return flat_fields(self.params["flat"])
+        return flat_fields(self.plan.flat)
 
     @property
     def timing(self):
@@ -128,18 +86,18 @@ class Raster(Unit):
 
     def elaborate(self, platform):
         m = Module()
-        setup, ch = self.setup, self.params["channels"]
+        setup, ch = self.setup, len(self.plan.channels)
         w = setup.w
         count = Signal(32)
         with m.If(self.i.valid & self.i.ready):
             m.d.sync += count.eq(count + 1)
-        ii = self.params["setup_ii"] or None
+        ii = self.plan.setup_ii or None
         # one triangle at a time, the setup's product copies keep their own registers: shared,
         # they saved 2.7k FF of the default raster's 15.5k, but a shared register feeds every
         # member's reader, and the routes from two of them set the clock (107.4, 110.9 and,
         # with alpha's saturation split, 118.9 MHz placed, against 134.3 and 133.6 unshared)
-        sc = Schedule(m, "su", Const(1), ii=ii, mults=self.params["setup_mults"], mux_groups=8,
-                      platform=platform, narrow=self.params["setup_narrow"], share=bool(ii))
+        sc = Schedule(m, "su", Const(1), ii=ii, mults=self.plan.setup_mults, mux_groups=8,
+                      platform=platform, narrow=self.plan.setup_narrow, share=bool(ii))
         flat = [f.name for f in self.flat_fields]
         src_ready = Signal()
         inputs = {**{f.name: self.i.payload[f.name] for f in self.inputs}, "tri": count}
@@ -169,15 +127,15 @@ class Raster(Unit):
         culled = Signal(32)
         rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat,
                                current, in_memory=consts is not None)
-        if self.params["row_serial"]:
+        if self.plan.row_serial:
             writes, started, written, re = row_engine_serial(
                 m, w, setup.modes, rows, rows_in, space, platform, flat,
-                self.params["row_serial"], consts, self.precision)
+                self.plan.row_serial, consts, self.precision)
             re_ii, re_length, re_busy = re["ii"], re["length"], re["busy"]
         else:
             rows, early, re, written = row_engine(m, w, setup.modes, rows, rows_in, space,
                                                   platform, flat,
-                                                  self.params["row_mults"] or ch + 1,
+                                                  self.plan.row_mults or ch + 1,
                                                   self.precision)
             writes = [("row_queue", rows, written, None), ("row_queue_early", early, re.start,
                                                           None)]
@@ -208,7 +166,7 @@ class Raster(Unit):
         ready = idle_copy()
         m.d.comb += [sc.start.eq(self.i.valid & ready), self.i.ready.eq(ready)]
         v = sc.inputs(inputs, copy=idle_copy)
-        in_turn = self.params["setup_serial"]
+        in_turn = self.plan.setup_serial
         coef = self.setup.program(sc, v, in_turn=bool(in_turn))
         coef.update({k: v[k] for k in flat})          # held as tri is, in the input registers
         sc.keep(*coef.values())                       # the walker reads them after the job
@@ -237,21 +195,6 @@ class Raster(Unit):
             run_n = (self.i.valid & r) | (running[k] & ~last)
             m.d.sync += [running[k].eq(run_n), r.eq(~run_n & ~done_n)]
         return coef, done_n, running[0] | done | busy, end, consts
-
-
-@functools.lru_cache(maxsize=None)
-def _products(*params):
-    """The setup's products per triangle, and how many of them fit a narrow multiplier (its
-    program on a schedule of its own)."""
-    from amaranth.hdl import Module
-    setup = Setup(*params)
-    m, w = Module(), setup.w
-    sc = Schedule(m, "count", Const(1))
-    fields = triangle_fields(w.screen_bits, w.sub_bits, setup.channels, max(setup.groups) + 1)
-    v = {f.name: Signal(f.fmt.shape, name=f.name) for f in fields}
-    setup.program(sc, {**v, "tri": Signal(32)})
-    Fragment.get(m, None)                        # (its ROMs are used, for Amaranth's checks)
-    return sum(len(u) for u in sc.mults), sc.fits
 
 
 @functools.lru_cache(maxsize=None)

@@ -4,9 +4,10 @@ instantiates it and names its outputs for the stages after it (``rename``)."""
 import numpy as np
 
 from golden import raster as raster_model
-from hdl.setup_unit.formats import VALUE, parse_precision
+from hdl.setup_unit.formats import VALUE
 from hdl.shade_unit.formats import light_fields
 from hdl.span_unit import Raster as RasterUnit
+from hdl.span_unit.plan import KNOBS, RANGES, RECIPS, Channel, RasterPlan
 
 from ..stage import Stage
 
@@ -16,11 +17,9 @@ class Raster(Stage):
     format_group = "raster"
 
     given = ()            # what the stages after it give (``scene.pipeline.choose``)
-    KNOBS = ("setup_mults", "row_mults", "setup_ii", "setup_narrow", "row_serial",
-             "setup_serial")       # hdl.span_unit's architecture, passed on where set
-    build_params = {"recip": ("newton", RasterUnit.RANGES["recip"]),
-                    "recip_iters": (2, RasterUnit.RANGES["recip_iters"]),
-                    **{k: (RasterUnit.PARAMS[k], RasterUnit.RANGES[k]) for k in KNOBS}}
+    build_params = {"recip": (RECIPS[0], RECIPS),
+                    "recip_iters": (2, RANGES["recip_iters"]),
+                    **{k: (d, r) for k, (d, r, _) in KNOBS.items()}}   # the plan's knobs
 
     @property
     def channels(self):
@@ -39,23 +38,17 @@ class Raster(Stage):
         the raster's parameters."""
         q = self.q
         self.all_channels, self.flat_names = channels, flat
-        self.params = dict(screen_bits=q["screen_bits"], sub_bits=q["sub_bits"],
-                           channels=len(channels), modes=",".join(m for _, m, _ in channels),
-                           recip=q["recip"], recip_iters=q["recip_iters"])
-        self.params.update({k: q[k] for k in self.KNOBS
-                            if q[k] != RasterUnit.PARAMS[k]})      # defaults: Verilog unchanged
-        precision = [(bits or {}).get(n, VALUE.frac_bits) for n, _, _ in channels]
-        if min(precision) < VALUE.frac_bits:
-            self.params["precision"] = ",".join(map(str, precision))
-        if any(g for _, _, g in channels):
-            self.params["groups"] = ",".join(str(g) for _, _, g in channels)
-        if flat:
-            self.params["flat"] = len(flat)
+        # the raster's plan, checked here (a knob's setting), not at build; its parameters
+        # leave out the defaults, so that the Verilog's name does not change with a knob's
+        self.plan = RasterPlan(
+            q["screen_bits"], q["sub_bits"],
+            tuple(Channel(m, g, (bits or {}).get(n, VALUE.frac_bits)) for n, m, g in channels),
+            q["recip"], q["recip_iters"], len(flat), **{k: q[k] for k in KNOBS})
+        self.params = self.plan.params(defaults=False)
         names = [n for n, _, _ in channels]
         self.why = (f"shading.method = {q['method']}" if q["bump"] == "none" else
                     f"bump.method = {q['bump']}") + f": channels {', '.join(names)}" + \
             (f"; {len(flat)} flat word(s)" if flat else "")
-        RasterUnit.spec(**self.params)       # its checks (a knob's setting) now, not at build
         return self
 
     @property
@@ -79,7 +72,7 @@ class Raster(Stage):
         channels, reals; the flat words, integers). ``real``: from the unrounded inputs."""
         frag = raster_model.run(prep["inputs"], **self.params, real=real)
         ch = {name: frag[f"v{k}"] for k, (name, _, _) in enumerate(self.all_channels)}
-        bits = parse_precision(self.params.get("precision", "14"), len(self.all_channels))
+        bits = self.plan.precision
         for (name, _, _), p in zip(self.all_channels, bits):
             if real is None and p < VALUE.frac_bits:     # the RTL's format: p bits, rounded
                 ch[name] = np.floor(ch[name] * 2.0 ** p + 0.5) / 2.0 ** p
