@@ -18,6 +18,7 @@ dropped).
 import functools
 
 from amaranth.hdl import Const, Fragment, Module, Signal
+from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
 from ..sched import Schedule
@@ -26,7 +27,8 @@ from ..setup_unit.formats import (MODES, PRECISIONS, flat_fields, fragment_field
 from ..unit import Unit
 from .plan import KNOBS, RANGES as PLAN_RANGES, RECIPS, RasterPlan
 from .span import (Link, channel_engine, row_engine, row_engine_serial, row_queue,
-                   setup_queue, stepper, walker, walker_constants)
+                   setup_queue, walker, walker_constants)
+from .stepper import Stepper
 
 __all__ = ["Raster"]
 
@@ -141,7 +143,12 @@ class Raster(Unit):
                                                           None)]
             started, re_ii, re_length, re_busy = re.start, re.ii, re.length, re.busy()
         rows, queued, take = row_queue(m, writes, started, written, space)
-        cur = stepper(m, w, ch, rows, queued, take, self.o, flat, self.precision)
+        m.submodules.stepper = st = Stepper(w, {k: v.shape() for k, v in rows.items()},
+                                            self.o.payload.shape(), self.precision, flat)
+        m.d.comb += [st.i.valid.eq(queued), take.eq(st.i.valid & st.i.ready)]
+        m.d.comb += [st.i.payload[k].eq(v) for k, v in rows.items()]
+        wiring.connect(m, st.o, wiring.flipped(self.o))
+        cur = st.busy
         busy = (cur | self.o.valid | walking | rows_in.valid | written | queued | pending
                 | re_busy)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]

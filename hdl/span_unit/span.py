@@ -17,10 +17,9 @@ Four parts, each a stream stage with backpressure:
   the numerators times the reciprocal, then per channel Phi(u, v) (eq 17) and its first
   difference along x, Pu u + Pv v + P0. Exact numerators: rounding never accumulates across
   rows.
-- ``row_queue``: eight rows, with credits, so that no handshake runs back from the fragment
-  stream and the row engine never stalls.
-- ``stepper``: one fragment per clock, two additions per quadratic channel per pixel:
-  Phi += d, d += 2A (one for a linear channel, whose 2A is 0).
+- ``row_queue``: 15 rows, with credits, so that no handshake runs back from the fragment
+  stream and the row engine never stalls; its output is a stream into the stepper
+  (``hdl/span_unit/stepper.py``, a component of its own).
 """
 from amaranth.hdl import Const, Signal, Value, signed, unsigned
 from amaranth.lib.memory import Memory
@@ -30,7 +29,7 @@ from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
 
 __all__ = ["Link", "walker", "walker_constants", "row_engine", "row_engine_serial", "row_products",
-           "row_queue", "setup_queue", "channel_engine", "stepper"]
+           "row_queue", "setup_queue", "channel_engine"]
 
 
 # Rows the row queue holds (started, not yet taken): all but one of its memories' 16 words,
@@ -578,56 +577,4 @@ def setup_queue(m, sc, values, space, take, current=(), depth=15):
         m.d.sync += [rptr.eq(rptr + 1), cur.eq(rptr)]
     return out, valid, valid_next, held, offset
 
-
-def stepper(m, w, channels, rows, rows_valid, rows_take, o, flat=(), precision=None):
-    """One fragment per clock from the rows: Phi += d, d += 2A per pixel and channel, each
-    channel at its own FI (``w.fi`` of its ``precision``); the fragment registered (rounded
-    and saturated) on its way out, a value of ``precision`` fraction bits in ``VALUE``.
-    Returns its busy bit."""
-    precision = precision or (VALUE.frac_bits,) * channels
-    # Phi and d wrap modulo 2**acc_bits: only emitted values must fit: |Phi| < 128
-    acc_bits = [w.fi(p) + 9 for p in precision]
-    cur, last = Signal(), Signal()
-    data = lambda shape, name: Signal(shape, name=name, reset_less=True)   # no reset: valid
-    x, xe = data(w.screen_bits + 1, "st_x"), data(w.screen_bits + 1, "st_xe")  # bits have it
-    y, tri = data(w.screen_bits, "st_y"), data(len(rows["tri"]), "st_tri")
-    const = {k: data(len(rows[k]), f"st_{k}") for k in flat}   # the triangle's flat words
-    phi = [data(acc_bits[ch], f"st_phi{ch}") for ch in range(channels)]
-    d = [data(acc_bits[ch], f"st_d{ch}") for ch in range(channels)]
-    a2 = [data(acc_bits[ch], f"st_a2_{ch}") for ch in range(channels)]
-    # A one-fragment skid buffer beside the output register: the stepper emits while the
-    # skid is empty (``room``, a register), so its few hundred enables wait on no handshake
-    # from outside; a fragment emitted while the output register is held goes to the skid,
-    # and the skid goes out before anything newer (the stepper waits while it is full).
-    skid_valid = Signal(name="st_skid_valid")
-    room = ~skid_valid
-    take = ~cur | (room & last)
-    m.d.comb += rows_take.eq(take & rows_valid)
-    with m.If(take & rows_valid):
-        m.d.sync += [cur.eq(rows["some"]), last.eq(rows["one"]),
-                     x.eq(rows["xs"]), xe.eq(rows["xe"]), y.eq(rows["j"]), tri.eq(rows["tri"])]
-        m.d.sync += [r.eq(rows[k]) for k, r in const.items()]
-        for ch in range(channels):             # Phi arrives with the rounding half in it
-            m.d.sync += [phi[ch].eq(rows[f"phi{ch}"]),
-                         d[ch].eq(rows[f"d{ch}"]), a2[ch].eq(rows[f"c{ch}_a2"])]
-    with m.Elif(cur & room):
-        with m.If(last):
-            m.d.sync += cur.eq(0)
-        m.d.sync += [x.eq(x + 1), last.eq(x + 2 == xe)]
-        for ch in range(channels):
-            m.d.sync += [phi[ch].eq(phi[ch] + d[ch]), d[ch].eq(d[ch] + a2[ch])]
-    emit = cur & room
-    frag = {"tri": tri, "x": x, "y": y, **const}
-    for ch, p in enumerate(precision):          # saturated to [-2, 2) at p fraction bits
-        val = phi[ch].as_signed() >> (w.fi(p) - p)
-        top, low = (1 << (p + 1)) - 1, -(1 << (p + 1))
-        frag[f"v{ch}"] = Mux(val > top, top, Mux(val < low, low, val)) << (VALUE.frac_bits - p)
-    skid = {k: Signal.like(o.payload[k], name=f"st_skid_{k}", reset_less=True) for k in frag}
-    free = ~o.valid | o.ready                   # the output register is free
-    with m.If(free):
-        m.d.sync += [o.valid.eq(skid_valid | emit), skid_valid.eq(0)]
-        m.d.sync += [o.payload[k].eq(Mux(skid_valid, skid[k], v)) for k, v in frag.items()]
-    with m.Elif(emit):
-        m.d.sync += [skid_valid.eq(1)] + [skid[k].eq(v) for k, v in frag.items()]
-    return cur | skid_valid
 
