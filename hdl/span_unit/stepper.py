@@ -37,7 +37,7 @@ class Stepper(wiring.Component):
         channels = len(self.precision)
         # Phi and d wrap modulo 2**acc_bits: only emitted values must fit: |Phi| < 128
         acc_bits = [w.fi(p) + 9 for p in self.precision]
-        cur, last = Signal(), Signal()
+        cur, last = Signal(name="st_cur"), Signal(name="st_last")
         reg = lambda shape, name: Signal(shape, name=name, reset_less=True)   # no reset:
         x, xe = reg(w.screen_bits + 1, "st_x"), reg(w.screen_bits + 1, "st_xe")  # valid bits
         y, tri = reg(w.screen_bits, "st_y"), reg(len(rows.tri), "st_tri")        # have it

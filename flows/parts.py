@@ -1,0 +1,312 @@
+"""The raster's parts proven alone (issue 49 §3), starting with the stepper
+(``hdl/span_unit/stepper.py``): rows in, one fragment per clock out, both streams.
+
+The stepper under proof is the one the raster builds at make formal's size (a 16 x 16 screen,
+one channel), taken from the raster's elaboration, so its row and fragment layouts are the
+real ones. The harness gives it free rows (any span ``[xs, xe)`` on the screen, ``some``
+and ``one`` as the row queue computes them, any row, Phi, d and 2A; each row's ``tri`` the
+count of rows accepted before it, so that rows are told apart) and a free ``ready``, and
+keeps a reference of its own: a queue of the rows accepted that have pixels, and how many
+fragments of the first one are out. It states:
+
+- ``held``: a stalled output keeps its valid and payload;
+- ``no_extra``: a fragment goes out only while a row owes one;
+- ``order``: each fragment is the next one owed: the first owing row's ``tri`` and row, at
+  the column after the last one out, so none is made, lost, repeated or reordered, and each
+  row gives exactly ``xe - xs`` fragments;
+- ``drain``: while a row owes fragments and ready is high, the next one is out within
+  ``DRAIN`` clocks (a row's first fragment waits two: its load, then the output register).
+
+All four are proven by k-induction, with invariants that tie the stepper's state (its output
+register, skid and current row) to the reference's next owed fragments (``_invariants``), so
+drain holds on every run, not to a depth. The mutants (``MUTANTS``) sit between the stepper
+and the harness and must be caught by a BMC of their own property.
+``python -m flows.parts``; ``make formal`` runs it too.
+"""
+import argparse
+import json
+
+from amaranth.back import verilog
+from amaranth.hdl import Fragment
+
+from .sby import COUNT, OUT, keep_only, run_sby
+
+PROVE_DEPTH = 8          # k of the proofs
+MUTANT_DEPTH = 12        # the mutants' BMC: each breaks its property within a few clocks
+COVER_DEPTH = 22         # the covers: a row of 16 pixels out, behind two others
+DRAIN = 2                # clocks a fragment owed may wait with ready high (above)
+SLOTS = 4                # the reference's rows owing fragments: the row in the stepper and
+#                          up to two whose last fragments sit in the output register and skid
+RASTER = {"screen_bits": 4, "channels": 1}
+PARTS = ("stepper",)     # make formal's targets here (ONLY=stepper)
+
+MUTANTS = {   # name: (what it breaks, the property that must catch it)
+    "dropped": ("a fragment offered is taken and lost on its way out", "order"),
+    "extra": ("a fragment that went out is offered again", "order"),
+    "unstable": ("a stalled fragment's column changes", "held"),
+    "stuck": ("the output stops offering fragments", "drain"),
+}
+CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "inv_")),
+          "cover": ("cover", None)}
+
+
+def stepper():
+    """The stepper as the raster builds it at ``RASTER``'s size."""
+    from hdl.units import make_unit
+    m = make_unit("raster", **RASTER).elaborate(None)
+    part = m.submodules.stepper
+    Fragment.get(m, None)                    # the raster's other parts: elaborated, not left
+    return part
+
+
+def export(part, module):
+    return verilog.convert(part, name=module, emit_src=False)
+
+
+def _fields(layout):
+    return {k: (f.offset, f.shape.width, f.shape.signed) for k, f in layout}
+
+
+def harness(part, module, mutant=None, only=None):
+    """The Verilog of ``formal_top``: the stepper as ``module``, its environment, the
+    reference, the properties (``only``: those whose labels start with one of these), and
+    ``mutant`` between the stepper's output and the harness."""
+    rows, frags = _fields(part.i.payload.shape()), _fields(part.o.payload.shape())
+    W, F = part.i.payload.shape().size, part.o.payload.shape().size
+    sb = part.w.screen_bits
+    X = sb + 2                           # columns 0 .. 2**sb, and their sums, unsigned
+    sl = lambda fields, bus, k: f"{bus}[{fields[k][0] + fields[k][1] - 1}:{fields[k][0]}]"
+    L = ["`default_nettype none", "module formal_top(input wire clk);",
+         "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;", "  wire rst = init;",
+         "  (* anyseq *) reg i_valid, o_ready, stop;",
+         f"  (* anyseq *) reg [{W - 1}:0] free;",
+         f"  wire [{W - 1}:0] i_payload;", "  wire i_ready, busy;",
+         "  wire d_valid, d_ready;", f"  wire [{F - 1}:0] d_payload;",
+         "  wire o_valid;", f"  wire [{F - 1}:0] o_payload;",
+         f"  {module} dut (.clk(clk), .rst(rst), .i__valid(i_valid), .i__ready(i_ready), "
+         ".i__payload(i_payload), .o__valid(d_valid), .o__ready(d_ready), "
+         ".o__payload(d_payload), .busy(busy));",
+         f"  reg [{COUNT - 1}:0] n_in = 0;",
+         "  wire in_t = ~rst & i_valid & i_ready;",
+         "  always @(posedge clk) if (!rst) n_in <= n_in + in_t;"]
+    # the row: its span on the screen (columns 0 .. 2**sb), some and one as the row queue's
+    # ``_outputs`` make them, tri = the rows accepted before it; the rest free
+    xs, xe = (f"{sl(rows, 'free', k)}" for k in ("xs", "xe"))
+    parts = {k: sl(rows, "free", k) for k in rows}
+    parts.update(some=f"($signed({xs}) < $signed({xe}))",
+                 one=f"($signed({xs}) + 1 == $signed({xe}))",
+                 tri=f"{{{rows['tri'][1] - COUNT}'d0, n_in}}")
+    order = sorted(rows, key=lambda k: -rows[k][0])
+    L += [f"  assign i_payload = {{{', '.join(parts[k] for k in order)}}};",
+          f"  always @* if (!rst) valid_row: assume($signed({xs}) >= 0 && "
+          f"$signed({xe}) <= {1 << sb});",
+          f"  reg [{W - 1}:0] past_in;", "  reg past_istall = 1'b0;",
+          "  always @(posedge clk) begin past_istall <= ~rst & i_valid & ~i_ready; "
+          "past_in <= free; end",
+          "  always @* if (past_istall) in_held: assume(i_valid && free == past_in);"]
+    # mutants, between the stepper (d_*) and the harness (o_*)
+    if mutant is None:
+        L += ["  assign o_valid = d_valid, o_payload = d_payload, d_ready = o_ready;"]
+    elif mutant == "dropped":            # once: a fragment taken from the stepper, not shown
+        L += ["  reg used = 1'b0;", "  wire now = stop & ~used & d_valid;",
+              "  always @(posedge clk) if (now) used <= 1'b1;",
+              "  assign o_valid = d_valid & ~now, o_payload = d_payload, "
+              "d_ready = o_ready | now;"]
+    elif mutant == "extra":              # once: a fragment that went out is offered again
+        L += ["  reg used = 1'b0, again = 1'b0;", f"  reg [{F - 1}:0] last;",
+              "  always @(posedge clk) begin again <= 1'b0;",
+              "    if (!used & stop & d_valid & o_ready) begin again <= 1'b1; "
+              "used <= 1'b1; last <= d_payload; end",
+              "    if (again & ~o_ready) again <= 1'b1; end",
+              "  assign o_valid = again | d_valid, o_payload = again ? last : d_payload, "
+              "d_ready = o_ready & ~again;"]
+    elif mutant == "unstable":           # once: a stalled fragment's column flips a bit
+        off = frags["x"][0]
+        L += [f"  assign o_valid = d_valid, o_payload = d_payload ^ "
+              f"((stop & d_valid & ~o_ready) ? {F}'d{1 << off} : {F}'d0), "
+              "d_ready = o_ready;"]
+    elif mutant == "stuck":              # from a clock the solver picks, nothing goes out
+        L += ["  reg dead = 1'b0;", "  always @(posedge clk) if (stop) dead <= 1'b1;",
+              "  assign o_valid = d_valid & ~dead, o_payload = d_payload, "
+              "d_ready = o_ready & ~dead;"]
+    else:
+        raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
+    # the reference: rows that owe fragments (tri, row, first and end column), and k, the
+    # fragments of the first one already out
+    R = SLOTS
+    tri_w = rows["tri"][1]
+    L += ["  wire out_t = ~rst & o_valid & o_ready;",
+          *[f"  reg [{tri_w - 1}:0] q_tri{s}; reg [{rows['j'][1] - 1}:0] q_y{s}; "
+            f"reg [{X - 1}:0] q_xs{s}, q_xe{s};" for s in range(R)],
+          "  reg [2:0] q_n = 0;", f"  reg [{X - 1}:0] k = 0;",
+          f"  wire [{X - 1}:0] in_xs = {xs}, in_xe = {xe};",
+          f"  wire push = in_t & $signed({xs}) < $signed({xe});",
+          f"  wire [{X - 1}:0] next_x = q_xs0 + k;",
+          "  wire pop = out_t && next_x + 1 == q_xe0;",
+          f"  wire [{tri_w - 1}:0] o_tri = {sl(frags, 'o_payload', 'tri')};",
+          f"  wire [{frags['x'][1] - 1}:0] o_x = {sl(frags, 'o_payload', 'x')};",
+          f"  wire [{frags['y'][1] - 1}:0] o_y = {sl(frags, 'o_payload', 'y')};",
+          "  always @(posedge clk) if (rst) begin q_n <= 0; k <= 0; end else begin",
+          "    k <= pop ? 0 : k + out_t;",
+          "    q_n <= q_n + push - pop;"]
+    for s in range(R):                   # shift out at a pop, the new row behind the rest
+        nxt = s + 1
+        keep = (f"q_tri{nxt}, q_y{nxt}, q_xs{nxt}, q_xe{nxt}" if nxt < R else None)
+        L += [f"    if (push && q_n - pop == {s}) begin q_tri{s} <= {{{tri_w - COUNT}'d0, n_in}}; "
+              f"q_y{s} <= {sl(rows, 'free', 'j')}; q_xs{s} <= in_xs; q_xe{s} <= in_xe; end"]
+        if keep:
+            L += [f"    else if (pop) begin q_tri{s} <= q_tri{nxt}; q_y{s} <= q_y{nxt}; "
+                  f"q_xs{s} <= q_xs{nxt}; q_xe{s} <= q_xe{nxt}; end"]
+    L += ["  end"]
+    L += _invariants(rows, frags, X, R)
+    L += [f"  reg [{F - 1}:0] past_out;", "  reg past_ostall = 1'b0;",
+          "  always @(posedge clk) begin past_ostall <= ~rst & o_valid & ~o_ready; "
+          "past_out <= o_payload; end",
+          "  reg [3:0] wait_n = 0;",
+          "  always @(posedge clk) wait_n <= (~rst & q_n != 0 & o_ready & ~out_t) ? "
+          "wait_n + 1 : 0;",
+          "  always @* if (!rst) begin",
+          "    if (past_ostall) begin held: assert(o_valid);",
+          "      held_payload: assert(o_payload == past_out); end",
+          f"    no_extra_slots: assert(q_n <= {R});",
+          "    if (out_t) no_extra: assert(q_n != 0);",
+          f"    if (out_t) order: assert(o_tri == q_tri0 && o_y == q_y0[{frags['y'][1] - 1}:0] "
+          f"&& o_x == next_x[{frags['x'][1] - 1}:0]);",
+          f"    drain: assert(wait_n <= {DRAIN});",
+          "    c_row: cover(pop && q_tri0 == 2);",
+          "    c_stall: cover(past_ostall && o_ready);",
+          "    c_long: cover(pop && q_xe0 - q_xs0 == 16);",
+          "  end", "endmodule"]
+    return keep_only("\n".join(L) + "\n", only)
+
+
+def _invariants(rows, frags, X, R):
+    """What makes the safety properties inductive: the stepper's state (its output register,
+    skid and current row, read from the flattened design by ``sby_text``'s connects, ``s_*``)
+    is the reference's next owed fragments, in order. F0 is the first owed (row 0 at column
+    ``next_x``), F1 and F2 each the one after (the next column, or the next row's first)."""
+    t, y = rows["tri"][1], frags["y"][1]
+    row = lambda f, r: f"(({r}) == 0 ? q_{f}0 : ({r}) == 1 ? q_{f}1 : q_{f}2)"
+    after = "r1 + 2'd1"
+    L = ["  (* keep *) wire s_cur, s_last, s_skid;",
+         f"  (* keep *) wire [{t - 1}:0] s_tri, s_skid_tri;",
+         f"  (* keep *) wire [{X - 2}:0] s_x, s_xe;",
+         f"  (* keep *) wire [{frags['x'][1] - 1}:0] s_skid_x;",
+         f"  (* keep *) wire [{y - 1}:0] s_y, s_skid_y;",
+         f"  wire [{X - 1}:0] c0 = next_x;", "  wire adv0 = c0 + 1 == q_xe0;",
+         "  wire [1:0] r1 = adv0 ? 2'd1 : 2'd0;",
+         f"  wire [{X - 1}:0] c1 = adv0 ? q_xs1 : c0 + 1;",
+         f"  wire adv1 = c1 + 1 == {row('xe', 'r1')};",
+         "  wire [1:0] r2 = adv1 ? r1 + 2'd1 : r1;",
+         f"  wire [{X - 1}:0] c2 = adv1 ? {row('xs', after)} : c1 + 1;",
+         "  wire [1:0] m = o_valid + s_skid;",
+         "  wire [1:0] rm = m == 0 ? 2'd0 : m == 1 ? r1 : r2;",
+         f"  wire [{X - 1}:0] cm = m == 0 ? c0 : m == 1 ? c1 : c2;",
+         *[f"  wire [{w - 1}:0] {f}_{r} = {row(f, r)};" for f, w in
+           (("tri", t), ("y", rows["j"][1]), ("xe", X)) for r in ("r1", "rm")],
+         "  always @* if (!rst) begin",
+         f"    inv_slots: assert(q_n <= 3 && (q_n == 0 ? k == 0 : k < q_xe0 - q_xs0));",
+         *[f"    if (q_n > {s}) inv_row{s}: assert(q_xs{s} < q_xe{s} && q_xe{s} <= {1 << (X - 2)});"
+           for s in range(R)],
+         f"    if (o_valid) inv_o: assert(q_n != 0 && o_tri == q_tri0 && o_y == q_y0[{y - 1}:0] "
+         f"&& o_x == c0[{frags['x'][1] - 1}:0]);",
+         "    if (s_skid) inv_skid: assert(o_valid && (r1 < q_n) && "
+         f"s_skid_tri == tri_r1 && s_skid_y == y_r1[{y - 1}:0] && "
+         f"s_skid_x == c1[{frags['x'][1] - 1}:0]);",
+         "    if (s_cur) inv_cur: assert(q_n == rm + 1 && "
+         f"s_tri == tri_rm && s_y == y_rm[{y - 1}:0] && "
+         f"s_x == cm[{X - 2}:0] && s_xe == xe_rm[{X - 2}:0] && s_last == (cm + 1 == xe_rm));",
+         "    if (!s_cur) inv_idle: assert(q_n == (m == 0 ? 0 : m == 1 ? 1 : r1 + 1) && "
+         "(m == 0 || (m == 1 ? adv0 : adv1)));",
+         "    if (!o_valid) inv_empty: assert(!s_skid);",
+         "  end"]
+    return L
+
+
+WIRES = [("s_cur", "st_cur"), ("s_last", "st_last"), ("s_skid", "st_skid_valid"),
+         ("s_tri", "st_tri"), ("s_skid_tri", "st_skid_tri"), ("s_x", "st_x"),
+         ("s_xe", "st_xe"), ("s_skid_x", "st_skid_x"), ("s_y", "st_y"),
+         ("s_skid_y", "st_skid_y")]
+
+
+def sby_text(module, mode, depth, invariants=True):
+    """The SymbiYosys job: the design flattened, the invariants' wires connected (a mutant's
+    BMC asserts none of them, and the signals they read may be optimised away)."""
+    return "\n".join([
+        "[options]", f"mode {mode}", f"depth {depth}", "multiclock off", "",
+        "[engines]", "smtbmc yices", "",
+        "[script]", "read_verilog -formal harness.v", f"read_verilog {module}.v",
+        "hierarchy -top formal_top", "proc", "flatten", "opt_clean", "cd formal_top",
+        *[f"connect -set {w} dut.{n}" for w, n in (WIRES if invariants else ())], "cd ..",
+        "prep -top formal_top", "",
+        "[files]", "harness.v", f"{module}.v", ""])
+
+
+def run(check, mutant=None, timeout=None, part=None):
+    """One check of the stepper (``CHECKS``), or a mutant with its property's check.
+    Returns ``{target, check, mutant, status, failed, seconds, depth}``."""
+    part = part or stepper()
+    mode, only = CHECKS[check]
+    depth = PROVE_DEPTH
+    if mutant:                  # a BMC of the one property it breaks
+        mode, only, depth = "bmc", (MUTANTS[mutant][1],), MUTANT_DEPTH
+    elif mode == "cover":
+        depth = COVER_DEPTH
+    tag = "stepper" + (f"_{mutant}" if mutant else "") + f"_{check}"
+    work = OUT / tag
+    module = "f_stepper"
+    status, failed, seconds = run_sby(work, {
+        f"{module}.v": export(part, module), "harness.v": harness(part, module, mutant, only),
+        "job.sby": sby_text(module, mode, depth, invariants=not mutant)}, mode, timeout)
+    out = {"target": "stepper", "check": mode if mutant else check, "mutant": mutant,
+           "status": status,
+           "failed": failed, "seconds": seconds, "depth": depth,
+           "log": str(work / "run.log")}
+    (work / "result.json").write_text(json.dumps(out, indent=2) + "\n")
+    return out
+
+
+def caught(r):
+    return r["status"] == "fail" and any(f.startswith(MUTANTS[r["mutant"]][1])
+                                         for f in r["failed"])
+
+
+def run_all(timeout=None):
+    """Every check, then every mutant; a line each; build/formal/parts.json."""
+    part, results = stepper(), []
+    for check, mutant in [(c, None) for c in CHECKS] + [("prove", m) for m in MUTANTS]:
+        r = run(check, mutant, timeout, part)
+        print(f"parts stepper {r['check']} {r['mutant'] or ''}: {r['status']} "
+              f"{' '.join(r['failed'])} {r['seconds']:.0f} s", flush=True)
+        results.append(r)
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "parts.json").write_text(json.dumps(results, indent=2) + "\n")
+    return results
+
+
+def table(results):
+    rows = ["| part | check | mutant | must fail | status | failed | s |",
+            "| --- | --- | --- | --- | --- | --- | --- |"]
+    rows += [f"| {r['target']} | {r['check']} | {r['mutant'] or '-'} | "
+             f"{MUTANTS[r['mutant']][1] if r['mutant'] else '-'} | "
+             f"{('caught' if caught(r) else 'NOT CAUGHT') if r['mutant'] else r['status']} | "
+             f"{', '.join(r['failed']) or '-'} | {r['seconds']:.0f} |" for r in results]
+    return "\n".join(rows) + "\n"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python -m flows.parts",
+                                 description=__doc__.split("\n")[0])
+    ap.add_argument("--timeout", type=float, default=None, help="seconds a check may take")
+    args = ap.parse_args(argv)
+    results = run_all(args.timeout)
+    print(table(results))
+    bad = [r for r in results if (r["mutant"] and not caught(r))
+           or (not r["mutant"] and r["status"] != "pass")]
+    if bad:
+        raise SystemExit(f"parts: {len(bad)} check(s) did not hold: "
+                         + ", ".join(f"{r['check']} {r['mutant'] or ''}" for r in bad))
+
+
+if __name__ == "__main__":
+    main()
