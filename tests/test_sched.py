@@ -2,7 +2,7 @@
 stands for, and it knows the registers it reads, whether it is wiring only, and how to be
 rebuilt with registers replaced; the schedule places each operation after the registers it
 reads are ready. (The raster's RTL tests hold the schedules' results bit for bit.)"""
-from amaranth.hdl import Cat as ACat, Const, Module, Mux as AMux, Signal, Value
+from amaranth.hdl import Cat as ACat, Const, Fragment, Module, Mux as AMux, Signal, Value
 
 from hdl.sched import Schedule
 from hdl.term import Cat, Mux, Term, term
@@ -40,3 +40,4 @@ def test_the_schedule_waits_for_its_operands():
     w = sc.let("w", Term.call(lambda v: v + 1, z)) # through a function: at 3
     assert [sc.ready[r] for r in (x, y, z, w)] == [1, 2, 3, 4]
     assert sc.reads[y] == 2 and sc.reads[z] == 3
+    Fragment.get(m, None)                         # built: Amaranth sees the module used

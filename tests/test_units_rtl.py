@@ -44,6 +44,11 @@ ICARUS_SOAK = [p.id for p in per_simulator(CONFIGS, only=("icarus",))
 VARIANTS_SOAK = [p.id for p in per_simulator(CONFIGS, only=("verilator",))
                  if p.values[2] and p.values[2] != {"method": "exact"}
                  and sum(n == p.values[1] for n, _ in CONFIGS) > 1]
+# bump_polar on Verilator (a model of its own, 47 s) in make soak: in make test Amaranth runs
+# its backpressure and one row a clock, test_simulators_agree holds the simulators to each
+# other, and the angular scene runs it on Verilator under random stalls on both sides
+# (tests/test_bump_scenes.py)
+VARIANTS_SOAK.append("verilator-bump_polar")
 
 
 @pytest.mark.parametrize("simulator,name,params", long_where(per_simulator(CONFIGS),
