@@ -21,6 +21,23 @@ settings.register_profile("shading", deadline=None, derandomize=True,
                           suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("shading")
 
+# Load balance on make test's two workers: the tests that take longest on a fresh clone (each
+# builds a simulator model of its own, 30-70 s; README, make test) start first, so that no
+# worker is left running one of them while the other idles at the end. Only the order
+# changes: no outcome depends on it.
+FIRST = ("test_angular_scene_rtl_within_bound", "test_a_small_scene_through_the_board_core",
+         "test_xz_scene_rtl_within_bound", "test_simulators_agree", "test_generated_scenes",
+         "test_phong_fenney_two_lights", "test_an_effect_with_its_own",
+         "test_a_new_effect_is_one_file", "test_onchip_texture_is_the_external_one",
+         "test_hard_cases", "test_edge_constant_groups")
+
+
+def pytest_collection_modifyitems(items):
+    rank = lambda item: next((k for k, name in enumerate(FIRST)
+                              if item.name.startswith(name)), len(FIRST))
+    items.sort(key=rank)                      # stable: the rest keep their order
+
+
 from golden import MODELS
 from hdl.units import make_unit
 from sim.run import simulate
