@@ -36,7 +36,7 @@ import shutil
 import sys
 
 from hdl.dsp import soft_as_mul
-from hdl.span_unit.span import ROW_QUEUE
+from hdl.span_unit.row_queue import ROW_QUEUE
 from hdl.units import UNITS, make_unit
 
 from sim.verilog import export
@@ -718,7 +718,7 @@ def main(argv=None):
     text = table(results) if results else ""
     joined = texjoin.run_all(joins, args.timeout) if joins else []
     text += ("\n" if text else "") + (texjoin.table(joined) if joined else "")
-    parted = parts.run_all(args.timeout) if proven else []
+    parted = parts.run_all(proven, args.timeout) if proven else []
     text += ("\n" if text else "") + (parts.table(parted) if parted else "")
     (OUT / "formal.md").write_text(text)
     print(text)

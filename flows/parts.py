@@ -1,5 +1,7 @@
-"""The raster's parts proven alone (issue 49 §3), starting with the stepper
-(``hdl/span_unit/stepper.py``): rows in, one fragment per clock out, both streams.
+"""The raster's parts proven alone (issue 49 §3): the stepper and the row queue.
+
+**The stepper** (``hdl/span_unit/stepper.py``): rows in, one fragment per clock out, both
+streams.
 
 The stepper under proof is the one the raster builds at make formal's size (a 16 x 16 screen,
 one channel), taken from the raster's elaboration, so its row and fragment layouts are the
@@ -19,15 +21,35 @@ fragments of the first one are out. It states:
 
 All four are proven by k-induction, with invariants that tie the stepper's state (its output
 register, skid and current row) to the reference's next owed fragments (``_invariants``), so
-drain holds on every run, not to a depth. The mutants (``MUTANTS``) sit between the stepper
-and the harness and must be caught by a BMC of their own property.
-``python -m flows.parts``; ``make formal`` runs it too.
+drain holds on every run, not to a depth. The mutants (``MUTANTS``) sit between the part's
+output and the harness and must be caught by a BMC of their own property.
+
+**The row queue** (``hdl/span_unit/row_queue.py``), as the raster builds it with each row
+engine (``row_queue``: the engine of all channels at once, a memory written at a row's
+start and one at its end; ``row_queue_serial``: the engine with its channels in turn, whose
+memories are written at the slots it gives). The harness is the engine: it starts a row only
+while ``space`` is high, writes a row's last values (``written``) only after its start, in
+order, and puts in the low bits of each memory's word the count of rows started (the early
+memory) or written (the others) before it: a tag that tells the rows apart. Against the
+counts of rows started, written and out:
+
+- ``credit``: never more than ``depth`` rows started and not taken, so the engine's rows
+  always find a place and no word is written again before it is read;
+- ``held``, ``no_extra`` (a row goes out only once written), ``order`` (every memory's
+  tag is the count of rows out: none made, lost, repeated or reordered, and every memory read
+  at the same row);
+- ``drain``: a written row is out within one clock while ready is high.
+
+Its invariants tie the queue's counts, pointers and every word of its memories (mapped to
+registers for the proof) to the counts.
+``python -m flows.parts [--only row_queue]``; ``make formal`` runs it too.
 """
 import argparse
 import json
 
 from amaranth.back import verilog
 from amaranth.hdl import Fragment
+from amaranth.lib import data
 
 from .sby import COUNT, OUT, keep_only, run_sby
 
@@ -38,25 +60,37 @@ DRAIN = 2                # clocks a fragment owed may wait with ready high (abov
 SLOTS = 4                # the reference's rows owing fragments: the row in the stepper and
 #                          up to two whose last fragments sit in the output register and skid
 RASTER = {"screen_bits": 4, "channels": 1}
-PARTS = ("stepper",)     # make formal's targets here (ONLY=stepper)
+TAG = 5                  # the row queue's tags: counts modulo 32, twice its 16 words
 
 MUTANTS = {   # name: (what it breaks, the property that must catch it)
     "dropped": ("a fragment offered is taken and lost on its way out", "order"),
     "extra": ("a fragment that went out is offered again", "order"),
     "unstable": ("a stalled fragment's column changes", "held"),
     "stuck": ("the output stops offering fragments", "drain"),
+    "overrun": ("the queue's space stays high: the engine starts rows it has no place for",
+                "credit"),
 }
-CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "inv_")),
+CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "credit", "inv_")),
           "cover": ("cover", None)}
+
+
+def _raster(**knobs):
+    """The raster at ``RASTER``'s size, elaborated whole (its parts are taken from it, so
+    their layouts are the real ones; nothing is left unelaborated)."""
+    from hdl.units import make_unit
+    m = make_unit("raster", **RASTER, **knobs).elaborate(None)
+    Fragment.get(m, None)
+    return m
 
 
 def stepper():
     """The stepper as the raster builds it at ``RASTER``'s size."""
-    from hdl.units import make_unit
-    m = make_unit("raster", **RASTER).elaborate(None)
-    part = m.submodules.stepper
-    Fragment.get(m, None)                    # the raster's other parts: elaborated, not left
-    return part
+    return _raster().submodules.stepper
+
+
+def row_queue(serial=False):
+    """The row queue as the raster builds it with either row engine."""
+    return _raster(**({"row_serial": 1} if serial else {})).submodules.row_queue
 
 
 def export(part, module):
@@ -67,7 +101,7 @@ def _fields(layout):
     return {k: (f.offset, f.shape.width, f.shape.signed) for k, f in layout}
 
 
-def harness(part, module, mutant=None, only=None):
+def stepper_harness(part, module, mutant=None, only=None):
     """The Verilog of ``formal_top``: the stepper as ``module``, its environment, the
     reference, the properties (``only``: those whose labels start with one of these), and
     ``mutant`` between the stepper's output and the harness."""
@@ -104,33 +138,7 @@ def harness(part, module, mutant=None, only=None):
           "  always @(posedge clk) begin past_istall <= ~rst & i_valid & ~i_ready; "
           "past_in <= free; end",
           "  always @* if (past_istall) in_held: assume(i_valid && free == past_in);"]
-    # mutants, between the stepper (d_*) and the harness (o_*)
-    if mutant is None:
-        L += ["  assign o_valid = d_valid, o_payload = d_payload, d_ready = o_ready;"]
-    elif mutant == "dropped":            # once: a fragment taken from the stepper, not shown
-        L += ["  reg used = 1'b0;", "  wire now = stop & ~used & d_valid;",
-              "  always @(posedge clk) if (now) used <= 1'b1;",
-              "  assign o_valid = d_valid & ~now, o_payload = d_payload, "
-              "d_ready = o_ready | now;"]
-    elif mutant == "extra":              # once: a fragment that went out is offered again
-        L += ["  reg used = 1'b0, again = 1'b0;", f"  reg [{F - 1}:0] last;",
-              "  always @(posedge clk) begin again <= 1'b0;",
-              "    if (!used & stop & d_valid & o_ready) begin again <= 1'b1; "
-              "used <= 1'b1; last <= d_payload; end",
-              "    if (again & ~o_ready) again <= 1'b1; end",
-              "  assign o_valid = again | d_valid, o_payload = again ? last : d_payload, "
-              "d_ready = o_ready & ~again;"]
-    elif mutant == "unstable":           # once: a stalled fragment's column flips a bit
-        off = frags["x"][0]
-        L += [f"  assign o_valid = d_valid, o_payload = d_payload ^ "
-              f"((stop & d_valid & ~o_ready) ? {F}'d{1 << off} : {F}'d0), "
-              "d_ready = o_ready;"]
-    elif mutant == "stuck":              # from a clock the solver picks, nothing goes out
-        L += ["  reg dead = 1'b0;", "  always @(posedge clk) if (stop) dead <= 1'b1;",
-              "  assign o_valid = d_valid & ~dead, o_payload = d_payload, "
-              "d_ready = o_ready & ~dead;"]
-    else:
-        raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
+    L += mutated(mutant, F, frags["x"][0])
     # the reference: rows that owe fragments (tri, row, first and end column), and k, the
     # fragments of the first one already out
     R = SLOTS
@@ -178,6 +186,35 @@ def harness(part, module, mutant=None, only=None):
           "    c_long: cover(pop && q_xe0 - q_xs0 == 16);",
           "  end", "endmodule"]
     return keep_only("\n".join(L) + "\n", only)
+
+
+def mutated(mutant, F, flip):
+    """The stream from the part (``d_*``) to the harness (``o_*``), with ``mutant`` between
+    (``F``: the payload's width; ``flip``: the payload bit the unstable mutant flips)."""
+    if mutant is None:
+        return ["  assign o_valid = d_valid, o_payload = d_payload, d_ready = o_ready;"]
+    if mutant == "dropped":            # once: an item taken from the part, not shown
+        return ["  reg used = 1'b0;", "  wire now = stop & ~used & d_valid;",
+                "  always @(posedge clk) if (now) used <= 1'b1;",
+                "  assign o_valid = d_valid & ~now, o_payload = d_payload, "
+                "d_ready = o_ready | now;"]
+    if mutant == "extra":              # once: an item that went out is offered again
+        return ["  reg used = 1'b0, again = 1'b0;", f"  reg [{F - 1}:0] last;",
+                "  always @(posedge clk) begin again <= 1'b0;",
+                "    if (!used & stop & d_valid & o_ready) begin again <= 1'b1; "
+                "used <= 1'b1; last <= d_payload; end",
+                "    if (again & ~o_ready) again <= 1'b1; end",
+                "  assign o_valid = again | d_valid, o_payload = again ? last : d_payload, "
+                "d_ready = o_ready & ~again;"]
+    if mutant == "unstable":           # once: a stalled item's bit ``flip`` flips
+        return [f"  assign o_valid = d_valid, o_payload = d_payload ^ "
+                f"((stop & d_valid & ~o_ready) ? {F}'d{1 << flip} : {F}'d0), "
+                "d_ready = o_ready;"]
+    if mutant == "stuck":              # from a clock the solver picks, nothing goes out
+        return ["  reg dead = 1'b0;", "  always @(posedge clk) if (stop) dead <= 1'b1;",
+                "  assign o_valid = d_valid & ~dead, o_payload = d_payload, "
+                "d_ready = o_ready & ~dead;"]
+    raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
 
 
 def _invariants(rows, frags, X, R):
@@ -229,36 +266,152 @@ WIRES = [("s_cur", "st_cur"), ("s_last", "st_last"), ("s_skid", "st_skid_valid")
          ("s_skid_y", "st_skid_y")]
 
 
-def sby_text(module, mode, depth, invariants=True):
-    """The SymbiYosys job: the design flattened, the invariants' wires connected (a mutant's
-    BMC asserts none of them, and the signals they read may be optimised away)."""
+def _queue_memories(part):
+    """Per memory of the row queue: its name, the width of its word, whether the engine
+    gives its slot, whether it is written at a row's start, and its offset in the row."""
+    out, at = [], 0
+    for name, (fields, slotted) in part.memories.items():
+        width = data.StructLayout(fields).size
+        out.append((name, width, slotted, name == "early", at))
+        at += width
+    return out
+
+
+def queue_harness(part, module, mutant=None, only=None):
+    """The Verilog of ``formal_top``: the row queue as ``module``, the engine that writes it
+    (module docstring), the counts, the properties and their invariants, and ``mutant``
+    between the queue's output and the harness."""
+    F = part.o.payload.shape().size
+    mems = _queue_memories(part)
+    D, T = part.depth, TAG
+    ports = "".join(f", .{n}__en({n}_en), .{n}__data({n}_data)"
+                    + (f", .{n}__addr({n}_addr)" if slotted else "")
+                    for n, _, slotted, _, _ in mems)
+    L = ["`default_nettype none", "module formal_top(input wire clk);",
+         "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;", "  wire rst = init;",
+         "  (* anyseq *) reg start, written, o_ready, stop;",
+         "  wire space, d_space, d_valid, d_ready;", f"  wire [{F - 1}:0] d_payload;",
+         "  assign space = " + ("1'b1;" if mutant == "overrun" else "d_space;"),
+         "  wire o_valid;", f"  wire [{F - 1}:0] o_payload;",
+         f"  reg [{COUNT - 1}:0] n_st = 0, n_wr = 0, n_out = 0;",
+         "  wire st_t = ~rst & start, wr_t = ~rst & written;",
+         "  wire out_t = ~rst & o_valid & o_ready;",
+         # the engine: a row starts only on a credit; its last write follows its start
+         "  always @* if (!rst) begin env_start: assume(!start || space); "
+         "env_written: assume(!written || n_wr != n_st); end",
+         "  always @(posedge clk) if (rst) begin n_st <= 0; n_wr <= 0; n_out <= 0; end "
+         "else begin n_st <= n_st + st_t; n_wr <= n_wr + wr_t; n_out <= n_out + out_t; end"]
+    for n, width, slotted, early, _ in mems:      # the tag in a word's low bits, the rest free
+        count = "n_st" if early else "n_wr"
+        L += [f"  (* anyseq *) reg [{width - 1}:0] {n}_free;",
+              f"  wire {n}_en = {'st_t' if early else 'wr_t'};",
+              f"  wire [{width - 1}:0] {n}_data = {{{n}_free[{width - 1}:{T}], "
+              f"{count}[{T - 1}:0]}};"]
+        if slotted:
+            L += [f"  wire [3:0] {n}_addr = {count}[3:0];"]
+    L += [f"  {module} dut (.clk(clk), .rst(rst), .start(st_t), .written(wr_t), "
+          f".space(d_space){ports}, .o__valid(d_valid), .o__ready(d_ready), "
+          ".o__payload(d_payload));"]
+    L += mutated(None if mutant == "overrun" else mutant, F, mems[0][4])
+    L += [f"  reg [{F - 1}:0] past_out;", "  reg past_ostall = 1'b0;",
+          "  always @(posedge clk) begin past_ostall <= ~rst & o_valid & ~o_ready; "
+          "past_out <= o_payload; end",
+          f"  wire [{COUNT - 1}:0] n_held = n_st - n_out, n_level = n_wr - n_out;",
+          "  reg [3:0] wait_n = 0;",
+          "  always @(posedge clk) wait_n <= (~rst & n_level != 0 & o_ready & ~out_t) ? "
+          "wait_n + 1 : 0;",
+          "  always @* if (!rst) begin",
+          "    if (past_ostall) begin held: assert(o_valid);",
+          "      held_payload: assert(o_payload == past_out); end",
+          f"    credit: assert(n_held <= {D});",
+          "    if (out_t) no_extra: assert(n_level != 0);",
+          *[f"    if (out_t) order_{n}: assert(o_payload[{at + T - 1}:{at}] == n_out[{T - 1}:0]);"
+            for n, _, _, _, at in mems],
+          "    drain: assert(wait_n <= 1);",
+          f"    c_full: cover(n_held == {D});",
+          "    c_wrap: cover(out_t && n_out == 17);",
+          "    c_stall: cover(past_ostall && o_ready);",
+          "  end"]
+    # invariants: the queue's counts and pointers are the harness's; every word of a memory
+    # that a row started (or written) and not taken owns holds that row's tag
+    L += [f"  (* keep *) wire [{D.bit_length() - 1}:0] s_level, s_held;",
+          "  (* keep *) wire s_valid;",
+          "  (* keep *) wire [3:0] s_rptr;",
+          *[f"  (* keep *) wire [3:0] s_wptr_{n};" for n, _, slotted, _, _ in mems
+            if not slotted],
+          *[f"  (* keep *) wire [{w - 1}:0] s_{n}_{a};" for n, w, _, _, _ in mems
+            for a in range(16)],
+          "  always @* if (!rst) begin",
+          "    inv_counts: assert(s_level == n_level && s_held == n_held "
+          "&& n_level <= n_held && s_rptr == n_out[3:0]);",
+          f"    inv_flags: assert(s_valid == (n_level != 0) && space == (n_held < {D}));",
+          *[f"    inv_wptr_{n}: assert(s_wptr_{n} == {'n_st' if early else 'n_wr'}[3:0]);"
+            for n, _, slotted, early, _ in mems if not slotted]]
+    for n, _, _, early, _ in mems:
+        owned = "n_held" if early else "n_level"
+        for a in range(16):
+            i = f"4'd{a} - n_out[3:0]"
+            L += [f"    if ({{{COUNT - 4}'d0, {i}}} < {owned}) inv_{n}_{a}: "
+                  f"assert(s_{n}_{a}[{T - 1}:0] == n_out[{T - 1}:0] + {{1'b0, {i}}});"]
+    L += ["  end", "endmodule"]
+    return keep_only("\n".join(L) + "\n", only)
+
+
+def queue_wires(part):
+    """The queue's registers and memory words the invariants read (``s_*``)."""
+    mems = _queue_memories(part)
+    return ([("s_level", "rq_level"), ("s_held", "rq_held"), ("s_valid", "rq_valid"),
+             ("s_rptr", "rq_rptr")]
+            + [(f"s_wptr_{n}", f"{n}_wptr") for n, _, slotted, _, _ in mems if not slotted]
+            + [(f"s_{n}_{a}", f"mem_{n}[{a}]") for n, *_ in mems for a in range(16)])
+
+
+# the parts: name -> (the part, its harness, the wires its invariants read, its mutants)
+STREAM = ("dropped", "extra", "unstable", "stuck")
+PARTS = {
+    "stepper": (stepper, stepper_harness, lambda part: WIRES, STREAM),
+    "row_queue": (row_queue, queue_harness, queue_wires, (*STREAM, "overrun")),
+    "row_queue_serial": (lambda: row_queue(serial=True), queue_harness, queue_wires,
+                         (*STREAM, "overrun")),
+}
+
+
+def sby_text(module, mode, depth, wires=()):
+    """The SymbiYosys job: the design flattened, for the invariants its memories mapped to
+    registers and their wires connected (a mutant's BMC asserts none of them, and the signals they
+    read may be optimised away)."""
     return "\n".join([
         "[options]", f"mode {mode}", f"depth {depth}", "multiclock off", "",
         "[engines]", "smtbmc yices", "",
         "[script]", "read_verilog -formal harness.v", f"read_verilog {module}.v",
-        "hierarchy -top formal_top", "proc", "flatten", "opt_clean", "cd formal_top",
-        *[f"connect -set {w} dut.{n}" for w, n in (WIRES if invariants else ())], "cd ..",
+        "hierarchy -top formal_top", "proc", "flatten", *(("memory_map",) if wires else ()),
+        "opt_clean",
+        "cd formal_top", *[f"connect -set {w} dut.{n}" for w, n in wires], "cd ..",
         "prep -top formal_top", "",
         "[files]", "harness.v", f"{module}.v", ""])
 
 
-def run(check, mutant=None, timeout=None, part=None):
-    """One check of the stepper (``CHECKS``), or a mutant with its property's check.
+def run(name, check, mutant=None, timeout=None, part=None):
+    """One check of part ``name`` (``CHECKS``), or a mutant with its property's check.
     Returns ``{target, check, mutant, status, failed, seconds, depth}``."""
-    part = part or stepper()
+    build, harness, wires, _ = PARTS[name]
+    part = part or build()
     mode, only = CHECKS[check]
     depth = PROVE_DEPTH
-    if mutant:                  # a BMC of the one property it breaks
-        mode, only, depth = "bmc", (MUTANTS[mutant][1],), MUTANT_DEPTH
+    if mutant:                  # a BMC of the one property it breaks (an overrun: once the
+        #                         queue is full, ``depth`` rows after the first start)
+        mode, only = "bmc", (MUTANTS[mutant][1],)
+        depth = part.depth + 4 if mutant == "overrun" else MUTANT_DEPTH
     elif mode == "cover":
         depth = COVER_DEPTH
-    tag = "stepper" + (f"_{mutant}" if mutant else "") + f"_{check}"
+    tag = name + (f"_{mutant}" if mutant else "") + f"_{check}"
     work = OUT / tag
-    module = "f_stepper"
+    module = f"f_{name}"
     status, failed, seconds = run_sby(work, {
         f"{module}.v": export(part, module), "harness.v": harness(part, module, mutant, only),
-        "job.sby": sby_text(module, mode, depth, invariants=not mutant)}, mode, timeout)
-    out = {"target": "stepper", "check": mode if mutant else check, "mutant": mutant,
+        "job.sby": sby_text(module, mode, depth, () if mutant else wires(part))},
+        mode, timeout)
+    out = {"target": name, "check": mode if mutant else check, "mutant": mutant,
            "status": status,
            "failed": failed, "seconds": seconds, "depth": depth,
            "log": str(work / "run.log")}
@@ -271,14 +424,18 @@ def caught(r):
                                          for f in r["failed"])
 
 
-def run_all(timeout=None):
-    """Every check, then every mutant; a line each; build/formal/parts.json."""
-    part, results = stepper(), []
-    for check, mutant in [(c, None) for c in CHECKS] + [("prove", m) for m in MUTANTS]:
-        r = run(check, mutant, timeout, part)
-        print(f"parts stepper {r['check']} {r['mutant'] or ''}: {r['status']} "
-              f"{' '.join(r['failed'])} {r['seconds']:.0f} s", flush=True)
-        results.append(r)
+def run_all(names=None, timeout=None):
+    """Every check, then every mutant, of each part in ``names`` (None: all); a line each;
+    build/formal/parts.json."""
+    results = []
+    for name in names or PARTS:
+        part = PARTS[name][0]()
+        for check, mutant in ([(c, None) for c in CHECKS]
+                              + [("prove", m) for m in PARTS[name][3]]):
+            r = run(name, check, mutant, timeout, part)
+            print(f"parts {name} {r['check']} {r['mutant'] or ''}: {r['status']} "
+                  f"{' '.join(r['failed'])} {r['seconds']:.0f} s", flush=True)
+            results.append(r)
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "parts.json").write_text(json.dumps(results, indent=2) + "\n")
     return results
@@ -297,9 +454,14 @@ def table(results):
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m flows.parts",
                                  description=__doc__.split("\n")[0])
+    ap.add_argument("--only", default=None, help=f"parts, comma-separated: {', '.join(PARTS)}")
     ap.add_argument("--timeout", type=float, default=None, help="seconds a check may take")
     args = ap.parse_args(argv)
-    results = run_all(args.timeout)
+    names = args.only.split(",") if args.only else None
+    unknown = [n for n in names or () if n not in PARTS]
+    if unknown:
+        ap.error(f"unknown part(s) {', '.join(unknown)}; parts: {', '.join(PARTS)}")
+    results = run_all(names, args.timeout)
     print(table(results))
     bad = [r for r in results if (r["mutant"] and not caught(r))
            or (not r["mutant"] and r["status"] != "pass")]

@@ -98,14 +98,15 @@ def test_the_tables_stand_in_replaces_roms_only(tmp_path):
 
 @pytest.mark.skipif(shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None,
                     reason="yowasp-sby is not installed")
-def test_the_stepper_proven_and_its_mutants_caught():
-    """The raster's stepper alone (flows/parts.py; make formal adds its covers): held,
-    no_extra, order and drain proven by k-induction, and each mutant caught by the property
-    it breaks."""
+@pytest.mark.parametrize("name", ["stepper", "row_queue"])
+def test_a_raster_part_proven_and_its_mutants_caught(name):
+    """A raster's part alone (flows/parts.py; make formal adds its covers, and the row queue
+    as the serial engine writes it): held, no_extra, order, drain (and the queue's credit)
+    proven by k-induction, and each mutant caught by the property it breaks."""
     from flows import parts
-    part = parts.stepper()
-    r = parts.run("prove", part=part)
+    part = parts.PARTS[name][0]()
+    r = parts.run(name, "prove", part=part)
     assert r["status"] == "pass" and not r["failed"], r
-    for mutant, (_, prop) in parts.MUTANTS.items():
-        r = parts.run("prove", mutant, part=part)
+    for mutant in parts.PARTS[name][3]:
+        r = parts.run(name, "prove", mutant, part=part)
         assert parts.caught(r), r

@@ -17,7 +17,7 @@ dropped).
 """
 import functools
 
-from amaranth.hdl import Const, Fragment, Module, Signal
+from amaranth.hdl import Const, Fragment, Module, Signal, Value
 from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
@@ -26,8 +26,9 @@ from ..setup_unit.formats import (MODES, PRECISIONS, flat_fields, fragment_field
                                    triangle_fields)
 from ..unit import Unit
 from .plan import KNOBS, RANGES as PLAN_RANGES, RECIPS, RasterPlan
-from .span import (Link, channel_engine, row_engine, row_engine_serial, row_queue,
-                   setup_queue, walker, walker_constants)
+from .row_queue import RowQueue
+from .span import (Link, channel_engine, row_engine, row_engine_serial, setup_queue, walker,
+                   walker_constants)
 from .stepper import Stepper
 
 __all__ = ["Raster"]
@@ -139,17 +140,23 @@ class Raster(Unit):
                                                   platform, flat,
                                                   self.plan.row_mults or ch + 1,
                                                   self.precision)
-            writes = [("row_queue", rows, written, None), ("row_queue_early", early, re.start,
-                                                          None)]
+            writes = [("late", rows, written, None), ("early", early, re.start, None)]
             started, re_ii, re_length, re_busy = re.start, re.ii, re.length, re.busy()
-        rows, queued, take = row_queue(m, writes, started, written, space)
-        m.submodules.stepper = st = Stepper(w, {k: v.shape() for k, v in rows.items()},
+        m.submodules.row_queue = rq = RowQueue({
+            name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None)
+            for name, vals, _, slot in writes})
+        m.d.comb += [rq.start.eq(started), rq.written.eq(written), space.eq(rq.space)]
+        for name, vals, en, slot in writes:
+            port = getattr(rq, name)
+            m.d.comb += [port.en.eq(en)] + [port.data[k].eq(x) for k, x in vals.items()]
+            if slot is not None:
+                m.d.comb += port.addr.eq(slot)
+        m.submodules.stepper = st = Stepper(w, {k: f.shape for k, f in rq.o.payload.shape()},
                                             self.o.payload.shape(), self.precision, flat)
-        m.d.comb += [st.i.valid.eq(queued), take.eq(st.i.valid & st.i.ready)]
-        m.d.comb += [st.i.payload[k].eq(v) for k, v in rows.items()]
+        wiring.connect(m, rq.o, st.i)
         wiring.connect(m, st.o, wiring.flipped(self.o))
         cur = st.busy
-        busy = (cur | self.o.valid | walking | rows_in.valid | written | queued | pending
+        busy = (cur | self.o.valid | walking | rows_in.valid | written | rq.o.valid | pending
                 | re_busy)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
         self._timing = (ii or end + 1, re_ii, re_length, end)

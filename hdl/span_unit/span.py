@@ -17,9 +17,8 @@ Four parts, each a stream stage with backpressure:
   the numerators times the reciprocal, then per channel Phi(u, v) (eq 17) and its first
   difference along x, Pu u + Pv v + P0. Exact numerators: rounding never accumulates across
   rows.
-- ``row_queue``: 15 rows, with credits, so that no handshake runs back from the fragment
-  stream and the row engine never stalls; its output is a stream into the stepper
-  (``hdl/span_unit/stepper.py``, a component of its own).
+- the row queue (``hdl/span_unit/row_queue.py``) and the stepper
+  (``hdl/span_unit/stepper.py``) are components of their own.
 """
 from amaranth.hdl import Const, Signal, Value, signed, unsigned
 from amaranth.lib.memory import Memory
@@ -27,17 +26,10 @@ from amaranth.lib.memory import Memory
 from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
+from .row_queue import credits
 
 __all__ = ["Link", "walker", "walker_constants", "row_engine", "row_engine_serial", "row_products",
-           "row_queue", "setup_queue", "channel_engine"]
-
-
-# Rows the row queue holds (started, not yet taken): all but one of its memories' 16 words,
-# so a row engine may run ahead of the stepper by 15 rows. Measured (batch Verilator, the
-# default scene's pipeline): 8 gave 0.897 fragments per clock on the default torus, 15 gives
-# 0.921; the short rows at triangles' tips drain a shallow queue while the engine's ~45
-# clocks of latency refill it.
-ROW_QUEUE = 15
+           "setup_queue", "channel_engine"]
 
 
 class Link:
@@ -337,14 +329,14 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     addr, chan = sc.late(v["slot"], at), sc.late(v["sel"], at)
     sc.read(at, addr, chan)
     en = sc.at(at)
-    writes = [(f"row_queue_c{c}", {f"phi{c}": out["phi"] >> cut[c], f"d{c}": out["d"] >> cut[c]},
+    writes = [(f"c{c}", {f"phi{c}": out["phi"] >> cut[c], f"d{c}": out["d"] >> cut[c]},
                en & chan[c], addr) for c in range(channels)]
     last = Signal(name="rs_written")
     m.d.comb += last.eq(en & chan[-1])
-    writes.append(("row_queue", {k: out[k] for k in ("xs", "xe", "some", "one")}, last, addr))
+    writes.append(("late", {k: out[k] for k in ("xs", "xe", "some", "one")}, last, addr))
     early = {k: rows[k] for k in ("j", "tri", *flat)}
     early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] >> cut[ch] for ch in range(channels)})
-    writes.append(("row_queue_early", early, started, slot))
+    writes.append(("early", early, started, slot))
     sc.finish()
     sc.check()
     busy = Signal(name="rs_busy")
@@ -401,55 +393,6 @@ def row_products(modes):
     """The row engine's products per row: u and v, then seven per quadratic channel and two
     per linear one."""
     return 2 + sum(2 if mode == "linear" else 7 for mode in modes)
-
-
-def row_queue(m, writes, started, written, space, depth=None):
-    """A queue of ``depth`` rows (distributed RAM, 16 deep at no extra cost) between the row
-    engine and the stepper, with credits: ``space`` (registered) is high while fewer than
-    ``depth`` rows are started and not yet taken, so a started row always finds a place and
-    the row engine needs no enable. No combinational path runs from the fragment stream's
-    ready back into the row engine and the walker. Its valid is a register (``level`` next
-    != 0), so the stepper's load enable is one LUT from registers. ``writes``: memories of
-    ``(name, values, enable, slot)``, each written at its row's slot (``slot`` None: its own
-    count of writes); the engine never stalls and keeps the rows' order, so the k-th start
-    is the k-th row out and every memory is read at one pointer (at most ``depth`` < 16 rows
-    started and not taken: no slot is written again before it is read). ``written``: a
-    row's last write. Returns ``(rows, valid, take)``; the caller drives ``take`` (only
-    while valid)."""
-    depth = depth or ROW_QUEUE
-    take = Signal(name="rq_take")
-    rptr = Signal(4, name="rq_rptr")
-    nonempty, _, _ = credits(m, "rq", started, written, take, space, depth)
-    out = {}
-    for name, vals, en, slot in writes:
-        mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
-        m.submodules[name] = mem                                  # 4-bit pointers wrap
-        wr, rd = mem.write_port(), mem.read_port(domain="comb")
-        if slot is None:
-            slot = Signal(4, name=f"{name}_wptr")
-            m.d.sync += slot.eq(slot + en)
-        m.d.comb += [wr.addr.eq(slot), wr.data.eq(Cat(*vals.values())), wr.en.eq(en),
-                     rd.addr.eq(rptr)]
-        out.update(_fields(rd.data, vals))
-    m.d.sync += rptr.eq(rptr + take)
-    return out, nonempty, take
-
-
-def credits(m, name, started, written, take, space, depth):
-    """A queue's flags from its handshakes: ``space`` (the caller's register) while fewer
-    than ``depth`` items are started and not yet taken; ``valid`` (a register) while one is
-    written and not taken. From compares of the registers and the handshakes, not from the
-    sums: an item is left unless the one item goes; fewer than ``depth`` held unless a full
-    queue grows. Returns ``(valid, valid_next, held)``."""
-    level = Signal(range(depth + 1), name=f"{name}_level")    # written, not yet taken
-    held = Signal(range(depth + 1), name=f"{name}_held")      # started, not yet taken
-    valid = Signal(name=f"{name}_valid")
-    valid_next = written | (level > 1) | (valid & ~take)
-    m.d.sync += [held.eq(held + started - take), level.eq(level + written - take),
-                 valid.eq(valid_next),
-                 space.eq((held < depth - 1) | ((held == depth - 1) & ~(started & ~take))
-                          | ((held == depth) & take & ~started))]
-    return valid, valid_next, held
 
 
 def _fields(data, like):
