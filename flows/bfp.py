@@ -19,6 +19,14 @@ horizontal chord (at the middle vertex's row); so dd scales as 1 / W and 2A as 1
 while a span is at most W + 1 pixels long. A triangle with W < 1 (a sliver across the rows)
 has spans of one pixel: its dd and 2A are never used.
 
+A second table weighs the other direction, row starts by additions (forward differences
+along the left edge): per mesh, the rows and fragments a triangle brings, which set how many
+products a row engine spends per triangle against a setup's, and K, how far the (u, v) of a
+triangle's fragments move from its first fragment's along x and y before they cancel
+(|du/dx X| + |du/dy Y| + |dv/dx X| + |dv/dy Y|, X and Y in pixels): an affine map stepped by
+additions has its relative error multiplied by K, where the numerators the RTL steps today
+are exact.
+
     python -m flows.bfp      (a minute: the driver and numpy only)"""
 import numpy as np
 
@@ -94,6 +102,28 @@ def errors(inputs, m, screen_bits, sub_bits, modes):
     return tri, err, width
 
 
+def additions(inputs, screen_bits, sub_bits, channels):
+    """Per triangle drawn: K (above) and W; and the fragments, rows and triangles in."""
+    x, y = R._vertices(inputs)
+    tri, px, py = R.coverage(x, y, sub_bits, screen_bits)
+    st = R.sorted_triangles(inputs, channels, sub_bits)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        omega = q.omega(st["x1"], st["y1"], st["x2"], st["y2"])
+        ux, uy, vx, vy = (st["y2"] / omega, -st["x2"] / omega, -st["y1"] / omega,
+                          st["x1"] / omega)
+        width = np.abs(omega) / st["y2"]
+    first = np.r_[True, tri[1:] != tri[:-1]]
+    start = np.maximum.accumulate(np.where(first, np.arange(len(tri)), 0))
+    X, Y = (px - px[start]).astype(float), (py - py[start]).astype(float)
+    k = (np.abs(ux[tri] * X) + np.abs(uy[tri] * Y) + np.abs(vx[tri] * X)
+         + np.abs(vy[tri] * Y))
+    per = np.zeros(len(ux))
+    np.maximum.at(per, tri, k)
+    drawn = np.unique(tri)
+    rows = len(np.unique(tri.astype(np.int64) * (2 << screen_bits) + py))
+    return per[drawn], width[drawn], len(tri), rows, len(st["x1"])
+
+
 def _scene_inputs(name, segments):
     scene = S.load(SCENES / f"{name}.toml")
     if segments:
@@ -131,6 +161,13 @@ def main():
                 slivers = f"{(width[drawn] < 1).mean() * 100:.1f} %"
         print(f"| {label} | {len(drawn):,} | {slivers} | " + " | ".join(cells)
               + f" | {over} |")
+    print("\n| triangles | in | fragments / triangle in | rows / triangle in | K median | "
+          "K p99 | K max | K > 64 |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    for label, inputs, sb, sub, modes in cases:
+        k, _, frags, rows, n = additions(inputs, sb, sub, len(modes))
+        print(f"| {label} | {n:,} | {frags / n:.1f} | {rows / n:.2f} | {np.median(k):.1f} | "
+              f"{np.percentile(k, 99):.0f} | {k.max():.0f} | {(k > 64).mean() * 100:.1f} % |")
 
 
 if __name__ == "__main__":
