@@ -27,8 +27,8 @@ from ..setup_unit.formats import (MODES, PRECISIONS, flat_fields, fragment_field
 from ..unit import Unit
 from .plan import KNOBS, RANGES as PLAN_RANGES, RECIPS, RasterPlan
 from .row_queue import RowQueue
-from .span import (Link, channel_engine, row_engine, row_engine_serial, setup_queue, walker,
-                   walker_constants)
+from .span import channel_engine, row_engine, row_engine_serial, setup_queue
+from .walker import Walker, walker_constants, walker_inputs
 from .stepper import Stepper
 
 __all__ = ["Raster"]
@@ -126,10 +126,20 @@ class Raster(Unit):
             coef, done_n, pending, end, consts = self._one_at_a_time(m, sc, inputs, src_ready,
                                                                     flat, platform)
             current = None
-        rows_in, space = Link("rows_in"), Signal(name="rq_space", init=1)
-        culled = Signal(32)
-        rows, walking = walker(m, w, ch, coef, done_n, src_ready, rows_in, culled, flat,
-                               current, in_memory=consts is not None)
+        space = Signal(name="rq_space", init=1)
+        in_memory = consts is not None
+        ins = walker_inputs(coef, ch, flat, in_memory, current is not None)
+        shapes = lambda vals: {k: Value.cast(x).shape() for k, x in vals.items()}
+        m.submodules.walker = wk = Walker(w, ch, shapes(ins), current and shapes(current), flat,
+                                          in_memory)
+        src_valid = Signal()               # the stream's valid: the register of done_n (the
+        m.d.sync += src_valid.eq(done_n)   # walker loads from done_n, a clock early)
+        m.d.comb += [wk.i.valid.eq(src_valid), wk.i_valid_next.eq(done_n),
+                     src_ready.eq(wk.i.ready)]
+        m.d.comb += [wk.i.payload[k].eq(x) for k, x in ins.items()]
+        if current:
+            m.d.comb += [wk.current[k].eq(x) for k, x in current.items()]
+        rows, rows_in = {k: wk.o.payload[k] for k, _ in wk.o.payload.shape()}, wk.o
         if self.plan.row_serial:
             writes, started, written, re = row_engine_serial(
                 m, w, setup.modes, rows, rows_in, space, platform, flat,
@@ -156,9 +166,9 @@ class Raster(Unit):
         wiring.connect(m, rq.o, st.i)
         wiring.connect(m, st.o, wiring.flipped(self.o))
         cur = st.busy
-        busy = (cur | self.o.valid | walking | rows_in.valid | written | rq.o.valid | pending
+        busy = (cur | self.o.valid | wk.busy | wk.o.valid | written | rq.o.valid | pending
                 | re_busy)
-        m.d.comb += [self.busy.eq(busy), self.culled.eq(culled)]
+        m.d.comb += [self.busy.eq(busy), self.culled.eq(wk.culled)]
         self._timing = (ii or end + 1, re_ii, re_length, end)
         return m
 

@@ -1,167 +1,22 @@
 """The span engine (seeds 000, 001): edge walking, span-start evaluation, forward differences.
 
-Four parts, each a stream stage with backpressure:
+The row engines, and the setup's queue and channel engine; the walker
+(``hdl/span_unit/walker.py``), the row queue and the stepper are components of their own.
 
-- ``walker``: holds one triangle from the setup unit and emits one row per clock, from the
-  first row whose centre is at or below the top vertex to the last one above the bottom vertex
-  (clipped to the screen). Each edge is a DDA in exact integers: column ``i = ceil(x / S -
-  1/2)`` of the edge's crossing and the remainder ``r = i den - num``; a row step adds the
-  quotient and remainder of ``2 S dx / (2 S dy)`` and carries once. The long edge runs top to
-  bottom; the short one top to middle, then middle to bottom from the middle vertex's row.
-  Columns ``[left, right)`` are the pixels whose centres lie inside (top-left rule); a row
-  with none on screen goes no further (two clocks in the walker's buffer, not a row
-  engine's interval, so sliver and off-screen rows cost little). Beside
-  them, the exact numerators nu = X y2 - Y x2, nv = Y x1 - X y1 (eq 18-20, sub-pixel units)
-  of the left edge's first pixel and of column 0, stepped with additions.
 - ``row_engine`` (a schedule on shared multipliers, a row every ``ii`` clocks): (u, v) from
   the numerators times the reciprocal, then per channel Phi(u, v) (eq 17) and its first
   difference along x, Pu u + Pv v + P0. Exact numerators: rounding never accumulates across
   rows.
-- the row queue (``hdl/span_unit/row_queue.py``) and the stepper
-  (``hdl/span_unit/stepper.py``) are components of their own.
 """
-from amaranth.hdl import Const, Signal, Value, signed, unsigned
+from amaranth.hdl import Const, Signal, Value, unsigned
 from amaranth.lib.memory import Memory
 
-from ..sched import CAPTURE_SHARE as SHARE, OPERAND, Schedule, _or_tree
+from ..sched import OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
 from .row_queue import credits
 
-__all__ = ["Link", "walker", "walker_constants", "row_engine", "row_engine_serial", "row_products",
-           "setup_queue", "channel_engine"]
-
-
-class Link:
-    """The handshake of an internal stream (valid/ready), for :class:`hdl.unit.Pipeline`."""
-
-    def __init__(self, name):
-        self.valid = Signal(name=f"{name}_valid")
-        self.ready = Signal(name=f"{name}_ready")
-
-
-def _step(i, r, q, d, n):
-    """One row of an edge DDA, with the remainder held as ``r - d`` and ``n - d`` beside it, so
-    the carry is a register's sign bit: (i + q + carry, r - d + n if carry else r - d)."""
-    carry = r[-1]
-    return i + q + carry, Mux(carry, r + n, r - d)
-
-
-def walker_constants(channels, flat=(), in_memory=False):
-    """The triangle's values the walker holds for its rows, unchanged while it walks
-    (``in_memory``: a channel's but 2A are in ``channel_engine``'s memory)."""
-    keys = ("a2",) if in_memory else ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")
-    return ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels) for k in keys]
-
-
-def walker(m, w, channels, src, src_valid_next, src_ready, out_link, culled, flat=(),
-           current=None, in_memory=False):
-    """Rows from triangles. ``src``: the setup's values; returns the row values (the edges'
-    columns ``xl``, ``xr`` of row ``j``, unclamped, the numerator tracks of the left edge's
-    first pixel E and of column 0 B, and the triangle's constants) and ``have`` (rows left).
-    ``src_valid_next``: the setup's valid in the next clock (the walker registers its load).
-    ``current``: the triangle's constants (``walker_constants``) as the setup queue holds
-    them for the triangle walked, read in place; without it the walker holds them."""
-    j = Signal(w.wrow)
-    to_j1, to_jm = (Signal(signed(w.wrow + 1), name=f"w_{k}") for k in ("to_j1", "to_jm"))
-    left_long = Signal()
-    keep = [] if current else walker_constants(channels, flat, in_memory)
-    held = current or {k: Signal.like(Value.cast(src[k]), name=f"w_{k}") for k in keep}
-    edge = {}
-    for e in ("l", "s", "t"):
-        edge[e] = {k: Signal.like(Value.cast(src[f"{e}_{k}"]), name=f"w_{e}_{k}")
-                   for k in "iqdn"}
-        edge[e]["r"] = Signal(signed(len(src[f"{e}_n"]) + 1), name=f"w_{e}_r",   # r - d
-                              reset_less=True)
-    # numerator tracks: the left edge's first pixel (E), column 0 (B); their steps
-    tr = {k: Signal(w.wn, name=f"w_{k}", reset_less=True) for k in
-          ("E_u", "E_v", "B_u", "B_v", "s0_u", "s0_v", "s1_u", "s1_v", "e1_u", "e1_v",
-           "t0_u", "t0_v", "t1_u", "t1_v", "bs_u", "bs_v")}
-    # A row goes into a one-row buffer when it is empty (``full``, a register), so every
-    # enable here comes from registers. The next triangle loads once the buffer's row (which
-    # reads ``held``) has gone; with a row every ``ii`` >= 3 clocks that costs no throughput.
-    # ``load`` and ``accept`` are registers too, computed a clock early from the next state.
-    # They drive about two thousand enables, so the state machine is copied: each copy drives
-    # a share (Schedule.aligned_copy says why copies must be state machines of their own).
-    last, at_jm = Signal(), Signal()           # to_j1 == 0, to_jm == 0 (registered)
-    rows = src["rows"]                         # not culled, j0 < j1 (the setup's register)
-
-    some = Signal(name="wb_some")              # the buffer's row has a pixel on screen
-
-    def control(k):
-        """A copy of the walker's state: (have, full, load, accept)."""
-        have, full = Signal(name=f"w_have{k}"), Signal(name=f"w_full{k}")
-        load, accept = Signal(name=f"w_load{k}"), Signal(name=f"w_accept{k}")
-        have_n = Mux(load, rows, have & ~(accept & last))
-        full_n = accept | (full & some & ~out_link.ready)     # a row of no pixel is dropped
-        m.d.sync += [have.eq(have_n), full.eq(full_n), accept.eq(have_n & ~full_n),
-                     load.eq(src_valid_next & ~have_n & ~full_n)]
-        return have, full, load, accept
-
-    have, full, load, accept = control(0)
-    m.d.comb += [src_ready.eq(~have & ~full), out_link.valid.eq(full & some)]
-
-    def init(e):     # the walker's remainder i den - num from the setup's floor remainder,
-        # held less d (and n as n - d): see _step; the setup computes both (r0, n0)
-        return {"i": src[f"{e}_i"], "r": src[f"{e}_r0"], "q": src[f"{e}_q"],
-                "d": src[f"{e}_d"], "n": src[f"{e}_n0"][:len(src[f"{e}_n"])]}
-
-    with m.If(load):                           # the rows and the edges: copy 0
-        m.d.sync += [j.eq(src["j0"]), to_j1.eq(src["to_j1"]), to_jm.eq(src["to_jm"]),
-                     left_long.eq(src["left_long"]), last.eq(src["last0"]),
-                     at_jm.eq(src["at_jm0"])]
-        first_short = src["first_short"]
-        for e in ("l", "t"):
-            m.d.sync += [edge[e][k].eq(val) for k, val in init(e).items()]
-        s_init, t_init = init("s"), init("t")
-        m.d.sync += [edge["s"][k].eq(Mux(first_short, t_init[k], s_init[k])) for k in "irqdn"]
-        with m.If(src["cull"]):
-            m.d.sync += culled.eq(culled + 1)
-    with m.Elif(accept):
-        m.d.sync += [j.eq(j + 1), to_j1.eq(to_j1 - 1), to_jm.eq(to_jm - 1),
-                     last.eq(to_j1 == 1), at_jm.eq(to_jm == 1)]     # compares, not sums
-        li, lr = _step(*(edge["l"][k] for k in "irqdn"))
-        m.d.sync += [edge["l"]["i"].eq(li), edge["l"]["r"].eq(lr)]
-        si, sr = _step(*(edge["s"][k] for k in "irqdn"))
-        with m.If(at_jm):
-            m.d.sync += [edge["s"][k].eq(edge["t"][k]) for k in "irqdn"]
-        with m.Else():
-            m.d.sync += [edge["s"]["i"].eq(si), edge["s"]["r"].eq(sr)]
-    carry = Mux(left_long, edge["l"]["r"][-1], edge["s"]["r"][-1])     # r < d
-    switch = ~left_long & at_jm
-    for n, a in enumerate("uv"):               # the tracks: a copy for each of u, v
-        _, _, load_a, accept_a = control(1 + n)
-        with m.If(load_a):
-            m.d.sync += [tr[k].eq(src[k]) for k in tr if k[0] not in "EB" and k[-1] == a]
-            m.d.sync += [tr[f"{t}_{a}"].eq(src[f"{t.lower()}0_{a}"]) for t in "EB"]
-        with m.Elif(accept_a):
-            m.d.sync += tr[f"B_{a}"].eq(tr[f"B_{a}"] + tr[f"bs_{a}"])
-            with m.If(switch):
-                m.d.sync += [tr[f"E_{a}"].eq(tr[f"e1_{a}"]), tr[f"s0_{a}"].eq(tr[f"t0_{a}"]),
-                             tr[f"s1_{a}"].eq(tr[f"t1_{a}"])]
-            with m.Else():
-                m.d.sync += tr[f"E_{a}"].eq(Mux(carry, tr[f"E_{a}"] + tr[f"s1_{a}"],   # both
-                                                tr[f"E_{a}"] + tr[f"s0_{a}"]))  # sums, then pick
-    bits = 3 * SHARE
-    for k in keep:                             # the triangle's constants: a copy per share
-        if bits >= SHARE:
-            _, _, load_k, _ = control(f"_{k}")
-            bits = 0
-        with m.If(load_k):
-            m.d.sync += held[k].eq(src[k])
-        bits += len(held[k])
-    row = {"j": j, "xl": Mux(left_long, edge["l"]["i"], edge["s"]["i"]),
-           "xr": Mux(left_long, edge["s"]["i"], edge["l"]["i"]),
-           **{k: tr[k] for k in ("E_u", "E_v", "B_u", "B_v")}}
-    buf = {k: Signal.like(Value.cast(x), name=f"wb_{k}", reset_less=True)
-           for k, x in row.items()}
-    _, _, _, accept_b = control("_buf")
-    size = 1 << w.screen_bits                  # [xl, xr) clamped to the screen is not empty
-    with m.If(accept_b):
-        m.d.sync += [buf[k].eq(x) for k, x in row.items()]
-        m.d.sync += some.eq((row["xl"] < row["xr"]) & (row["xr"] > 0) & (row["xl"] < size))
-    # the row engine clamps the span and picks the track (its first clock, not this one's)
-    return {**buf, **held}, have
+__all__ = ["row_engine", "row_engine_serial", "row_products", "setup_queue", "channel_engine"]
 
 
 def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None,
