@@ -1,4 +1,4 @@
-"""The raster's parts proven alone (issue 49 §3): the stepper and the row queue.
+"""The raster's parts proven alone (issue 49 §3): the walker, the row queue and the stepper.
 
 **The stepper** (``hdl/span_unit/stepper.py``): rows in, one fragment per clock out, both
 streams.
@@ -42,10 +42,23 @@ counts of rows started, written and out:
 
 Its invariants tie the queue's counts, pointers and every word of its memories (mapped to
 registers for the proof) to the counts.
+
+**The walker** (``hdl/span_unit/walker.py``), as the raster builds it one triangle at a time.
+The harness is the setup: free triangles, held until taken, each tagged with its count, with
+rows ``j0 .. j0 + to_j1`` on the screen unless culled or empty (the setup's row range; the
+columns of each row are free, so the DDA's exactness is left to the simulations against the
+edge-function model). Against the triangle walked, the rows visited and the row owed:
+
+- ``rows_visited``, ``rows_all``: each row of a triangle is visited once, in order, all of
+  them before the next triangle is taken; ``culled_count``: the culled triangles counted;
+- ``on_screen``: a row goes out only with a pixel on the screen;
+- ``held``, ``no_extra``, ``order`` (each row out is the last row visited with a pixel, of
+  the triangle walked; ``order_kept``: none is overtaken, so none is lost), ``drain``.
 ``python -m flows.parts [--only row_queue]``; ``make formal`` runs it too.
 """
 import argparse
 import json
+import re
 
 from amaranth.back import verilog
 from amaranth.hdl import Fragment
@@ -70,7 +83,8 @@ MUTANTS = {   # name: (what it breaks, the property that must catch it)
     "overrun": ("the queue's space stays high: the engine starts rows it has no place for",
                 "credit"),
 }
-CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "credit", "inv_")),
+CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "credit", "on_screen",
+                             "rows_", "culled", "inv_")),
           "cover": ("cover", None)}
 
 
@@ -366,10 +380,151 @@ def queue_wires(part):
             + [(f"s_{n}_{a}", f"mem_{n}[{a}]") for n, *_ in mems for a in range(16)])
 
 
+def walker():
+    """The walker as the raster builds it at ``RASTER``'s size (one triangle at a time: it
+    holds the triangle's constants)."""
+    return _raster().submodules.walker
+
+
+def _copies(part):
+    """The walker's copies of its state machine (``control(k)`` in walker.py), from its
+    Verilog."""
+    text = export(part, "f_walker")
+    return sorted(set(re.findall(r"\bw_full(\w+)\b", text)) - {"0"})
+
+
+def walker_harness(part, module, mutant=None, only=None):
+    """The Verilog of ``formal_top``: the walker as ``module``; free triangles from a setup
+    that keeps its valid and payload until they are taken (the valid the register of the
+    early one), each tagged ``tri`` with its count, with rows ``j0 .. j0 + to_j1`` on the
+    screen unless culled or empty; the reference (the triangle walked, the rows visited, the
+    row owed); the properties and their invariants; ``mutant`` on the rows' stream."""
+    ins, rows = _fields(part.i.payload.shape()), _fields(part.o.payload.shape())
+    W, F = part.i.payload.shape().size, part.o.payload.shape().size
+    sl = lambda fields, bus, k: f"{bus}[{fields[k][0] + fields[k][1] - 1}:{fields[k][0]}]"
+    size = 1 << part.w.screen_bits
+    C = COUNT
+    L = ["`default_nettype none", "module formal_top(input wire clk);",
+         "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;", "  wire rst = init;",
+         "  (* anyseq *) reg i_valid_next, o_ready, stop;",
+         f"  (* anyseq *) reg [{W - 1}:0] free;",
+         "  reg i_valid = 1'b0;", "  always @(posedge clk) i_valid <= ~rst & i_valid_next;",
+         f"  wire [{W - 1}:0] i_payload;", "  wire i_ready, busy;", "  wire [31:0] culled;",
+         "  wire d_valid, d_ready;", f"  wire [{F - 1}:0] d_payload;",
+         "  wire o_valid;", f"  wire [{F - 1}:0] o_payload;",
+         f"  {module} dut (.clk(clk), .rst(rst), .i__valid(i_valid), .i__ready(i_ready), "
+         ".i_valid_next(i_valid_next), .i__payload(i_payload), .o__valid(d_valid), "
+         ".o__ready(d_ready), .o__payload(d_payload), .culled(culled), .busy(busy));",
+         f"  reg [{C - 1}:0] n_in = 0, n_cull = 0;",
+         "  wire in_t = ~rst & i_valid & i_ready;",
+         f"  wire [{ins['to_j1'][1] - 1}:0] f_to_j1 = {sl(ins, 'free', 'to_j1')};",
+         f"  wire [{ins['to_jm'][1] - 1}:0] f_to_jm = {sl(ins, 'free', 'to_jm')};",
+         f"  wire [{ins['j0'][1] - 1}:0] f_j0 = {sl(ins, 'free', 'j0')};",
+         f"  wire f_rows = {sl(ins, 'free', 'rows')}, f_cull = {sl(ins, 'free', 'cull')};"]
+    parts = {k: sl(ins, "free", k) for k in ins}
+    parts.update(tri=f"{{{ins['tri'][1] - C}'d0, n_in}}", last0="(f_to_j1 == 0)",
+                 at_jm0="(f_to_jm == 0)")
+    order = sorted(ins, key=lambda k: -ins[k][0])
+    L += [f"  assign i_payload = {{{', '.join(parts[k] for k in order)}}};",
+          # the setup's triangles: rows j0 .. j0 + to_j1 on the screen, none if culled
+          "  always @* if (!rst && i_valid) valid_tri: assume(!f_rows || (!f_cull && "
+          f"$signed(f_j0) >= 0 && $signed(f_to_j1) >= 0 && $signed(f_j0) + $signed(f_to_j1) "
+          f"< {size + 1}));",
+          f"  reg [{W - 1}:0] past_in;", "  reg past_istall = 1'b0;",
+          "  always @(posedge clk) begin past_istall <= ~rst & i_valid & ~i_ready; "
+          "past_in <= free; end",
+          "  always @* if (past_istall) in_held: assume(i_valid && free == past_in);",
+          "  always @(posedge clk) if (!rst) begin n_in <= n_in + in_t; "
+          "n_cull <= n_cull + (in_t & f_cull); end"]
+    L += mutated(mutant, F, rows["j"][0])
+    # the reference: the triangle walked (its tag, rows, first row, rows - 1), the rows
+    # visited (k, from the walker's accept), and the row owed: visited, with pixels on the
+    # screen (the walker's own test, a clock after its visit), not yet out
+    jw = rows["j"][1]
+    L += ["  (* keep *) wire s_have, s_full, s_load, s_accept, s_last, s_some;",
+          f"  (* keep *) wire [{jw - 1}:0] s_j, s_buf_j;",
+          f"  (* keep *) wire [{jw}:0] s_to_j1;",
+          f"  (* keep *) wire [{rows['xl'][1] - 1}:0] s_buf_xl, s_buf_xr;",
+          f"  (* keep *) wire [{rows['tri'][1] - 1}:0] s_tri;",
+          "  wire out_t = ~rst & o_valid & o_ready;",
+          f"  reg [{C - 1}:0] r_tri = 0; reg r_rows = 1'b0, any_in = 1'b0;",
+          f"  reg [{jw}:0] r_j0 = 0, r_n = 0, k = 0;",
+          f"  reg owed = 1'b0, visited = 1'b0; reg [{jw - 1}:0] owed_j = 0;",
+          "  wire push = visited & s_some, owing = owed | push;",
+          f"  wire [{jw - 1}:0] owing_j = owed ? owed_j : s_buf_j;",
+          "  always @(posedge clk) if (rst) begin r_rows <= 0; k <= 0; owed <= 0; "
+          "visited <= 0; any_in <= 0; end else begin",
+          "    visited <= s_accept; any_in <= any_in | in_t;",
+          f"    if (in_t) begin r_tri <= n_in; r_rows <= f_rows; r_j0 <= f_j0[{jw}:0]; "
+          f"r_n <= f_to_j1[{jw}:0]; k <= 0; end",
+          "    else k <= k + s_accept;",
+          "    if (out_t) owed <= 1'b0;",
+          "    else if (push) begin owed <= 1'b1; owed_j <= s_buf_j; end",
+          "  end",
+          f"  reg [{F - 1}:0] past_out;", "  reg past_ostall = 1'b0;",
+          "  always @(posedge clk) begin past_ostall <= ~rst & o_valid & ~o_ready; "
+          "past_out <= o_payload; end",
+          "  reg [3:0] wait_n = 0;",
+          "  always @(posedge clk) wait_n <= (~rst & (owing | s_have) & o_ready & ~out_t & "
+          "~s_accept) ? wait_n + 1 : 0;",
+          f"  wire [{jw - 1}:0] o_j = {sl(rows, 'o_payload', 'j')};",
+          f"  wire [{rows['xl'][1] - 1}:0] o_xl = {sl(rows, 'o_payload', 'xl')}, "
+          f"o_xr = {sl(rows, 'o_payload', 'xr')};",
+          f"  wire [{rows['tri'][1] - 1}:0] o_tri = {sl(rows, 'o_payload', 'tri')};",
+          "  always @* if (!rst) begin",
+          "    if (past_ostall) begin held: assert(o_valid);",
+          "      held_payload: assert(o_payload == past_out); end",
+          "    if (out_t) no_extra: assert(r_rows && any_in);",
+          f"    if (out_t) order: assert(owing && o_j == owing_j && "
+          f"o_tri == {{{rows['tri'][1] - C}'d0, r_tri}});",
+          "    if (push) order_kept: assert(!owed);",
+          f"    if (out_t) on_screen: assert($signed(o_xl) < $signed(o_xr) && $signed(o_xr) > 0 "
+          f"&& $signed(o_xl) < {size});",
+          "    if (s_accept) rows_visited: assert(r_rows && k <= r_n && s_j == r_j0 + k);",
+          "    if (in_t && any_in) rows_all: assert(!r_rows || k == r_n + 1);",
+          f"    culled_count: assert(culled[{C - 1}:0] == n_cull);",
+          "    drain: assert(wait_n <= 2);",
+          "    c_rows: cover(out_t && o_tri == 2 && o_j == r_j0 + 2);",
+          "    c_stall: cover(past_ostall && o_ready);",
+          "    c_skip: cover(visited && !s_some && s_have);",
+          "  end"]
+    # invariants: the copies agree; load and accept are the handshakes they stand for; the
+    # walker's row counters are the reference's; the buffer holds the last row visited
+    L += [f"  (* keep *) wire s_{x}_{c};" for c in _copies(part) for x in
+          ("have", "full", "load", "accept")]
+    L += ["  always @* if (!rst) begin",
+          *[f"    inv_copy_{c}: assert(s_have_{c} == s_have && s_full_{c} == s_full && "
+            f"s_load_{c} == s_load && s_accept_{c} == s_accept);" for c in _copies(part)],
+          "    inv_load: assert(s_load == (i_valid & i_ready) && i_ready == (~s_have & ~s_full));",
+          "    inv_accept: assert(s_accept == (s_have & ~s_full) && busy == s_have);",
+          "    inv_visited: assert(visited == 0 || (s_full && k != 0));",
+          "    if (s_have) inv_have: assert(r_rows && any_in && k <= r_n && s_j == r_j0 + k "
+          "&& s_to_j1 == r_n - k && s_last == (k == r_n));",
+          f"    if (r_rows) inv_rows: assert(any_in && r_j0 + r_n < {size + 1});",
+          "    if (!s_have) inv_idle: assert(!any_in || !r_rows || k == r_n + 1);",
+          "    if (s_full) inv_full: assert(r_rows && k != 0 && s_buf_j == r_j0 + k - 1 && "
+          f"s_some == ($signed(s_buf_xl) < $signed(s_buf_xr) && $signed(s_buf_xr) > 0 && "
+          f"$signed(s_buf_xl) < {size}) && s_tri == {{{rows['tri'][1] - C}'d0, r_tri}});",
+          "    inv_owed: assert(owed == (s_full && s_some && !visited) && "
+          "(!owed || owed_j == s_buf_j) && o_valid == (s_full && s_some));",
+          "  end", "endmodule"]
+    return keep_only("\n".join(L) + "\n", only)
+
+
+def walker_wires(part):
+    return ([("s_have", "busy"), ("s_full", "w_full0"), ("s_load", "w_load0"),
+             ("s_accept", "w_accept0"), ("s_last", "w_last"), ("s_some", "wb_some"),
+             ("s_j", "j"), ("s_buf_j", "wb_j"), ("s_to_j1", "w_to_j1"),
+             ("s_buf_xl", "wb_xl"), ("s_buf_xr", "wb_xr"), ("s_tri", "w_tri")]
+            + [(f"s_{x}_{c}", f"w_{x}{c}") for c in _copies(part)
+               for x in ("have", "full", "load", "accept")])
+
+
 # the parts: name -> (the part, its harness, the wires its invariants read, its mutants)
 STREAM = ("dropped", "extra", "unstable", "stuck")
 PARTS = {
     "stepper": (stepper, stepper_harness, lambda part: WIRES, STREAM),
+    "walker": (walker, walker_harness, walker_wires, STREAM),
     "row_queue": (row_queue, queue_harness, queue_wires, (*STREAM, "overrun")),
     "row_queue_serial": (lambda: row_queue(serial=True), queue_harness, queue_wires,
                          (*STREAM, "overrun")),

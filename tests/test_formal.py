@@ -98,11 +98,12 @@ def test_the_tables_stand_in_replaces_roms_only(tmp_path):
 
 @pytest.mark.skipif(shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None,
                     reason="yowasp-sby is not installed")
-@pytest.mark.parametrize("name", ["stepper", "row_queue"])
+@pytest.mark.parametrize("name", ["stepper", "row_queue", "walker"])
 def test_a_raster_part_proven_and_its_mutants_caught(name):
     """A raster's part alone (flows/parts.py; make formal adds its covers, and the row queue
     as the serial engine writes it): held, no_extra, order, drain (and the queue's credit)
-    proven by k-induction, and each mutant caught by the property it breaks."""
+    proven by k-induction (the walker's rows visited and on the screen too), and each mutant
+    caught by the property it breaks."""
     from flows import parts
     part = parts.PARTS[name][0]()
     r = parts.run(name, "prove", part=part)

@@ -117,7 +117,7 @@ class Walker(wiring.Component):
         # ``load`` and ``accept`` are registers too, computed a clock early from the next state.
         # They drive about two thousand enables, so the state machine is copied: each copy drives
         # a share (Schedule.aligned_copy says why copies must be state machines of their own).
-        last, at_jm = Signal(), Signal()           # to_j1 == 0, to_jm == 0 (registered)
+        last, at_jm = Signal(name="w_last"), Signal(name="w_at_jm")   # to_j1, to_jm == 0
         rows = src["rows"]                         # not culled, j0 < j1 (the setup's register)
 
         some = Signal(name="wb_some")              # the buffer's row has a pixel on screen
