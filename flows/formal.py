@@ -36,7 +36,7 @@ import shutil
 import sys
 
 from hdl.dsp import soft_as_mul
-from hdl.span_unit.row_queue import ROW_QUEUE
+from hdl.span_unit.queue import ROW_QUEUE
 from hdl.units import UNITS, make_unit
 
 from sim.verilog import export

@@ -24,10 +24,11 @@ register, skid and current row) to the reference's next owed fragments (``_invar
 drain holds on every run, not to a depth. The mutants (``MUTANTS``) sit between the part's
 output and the harness and must be caught by a BMC of their own property.
 
-**The row queue** (``hdl/span_unit/row_queue.py``), as the raster builds it with each row
-engine (``row_queue``: the engine of all channels at once, a memory written at a row's
-start and one at its end; ``row_queue_serial``: the engine with its channels in turn, whose
-memories are written at the slots it gives). The harness is the engine: it starts a row only
+**The queue** (``hdl/span_unit/queue.py``), as the raster builds it with each row engine
+(``row_queue``: the engine of all channels at once, a memory written at a row's start and
+one at its end; ``row_queue_serial``: the engine with its channels in turn, whose memories
+are written at the slots it gives) and with an overlapped setup (``setup_queue``: the
+walker's constants in memories read at the slot last taken). The harness is the engine: it starts a row only
 while ``space`` is high, writes a row's last values (``written``) only after its start, in
 order, and puts in the low bits of each memory's word the count of rows started (the early
 memory) or written (the others) before it: a tag that tells the rows apart. Against the
@@ -73,7 +74,8 @@ DRAIN = 2                # clocks a fragment owed may wait with ready high (abov
 SLOTS = 4                # the reference's rows owing fragments: the row in the stepper and
 #                          up to two whose last fragments sit in the output register and skid
 RASTER = {"screen_bits": 4, "channels": 1}
-TAG = 5                  # the row queue's tags: counts modulo 32, twice its 16 words
+TAG = 5                  # the queues' tags: counts modulo 32, twice their 16 words
+SETUP_II = 48            # the setup queue's raster: a triangle every 48 clocks
 
 MUTANTS = {   # name: (what it breaks, the property that must catch it)
     "dropped": ("a fragment offered is taken and lost on its way out", "order"),
@@ -84,7 +86,7 @@ MUTANTS = {   # name: (what it breaks, the property that must catch it)
                 "credit"),
 }
 CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "credit", "on_screen",
-                             "rows_", "culled", "inv_")),
+                             "rows_", "culled", "pending_", "valid_next", "inv_")),
           "cover": ("cover", None)}
 
 
@@ -280,56 +282,72 @@ WIRES = [("s_cur", "st_cur"), ("s_last", "st_last"), ("s_skid", "st_skid_valid")
          ("s_skid_y", "st_skid_y")]
 
 
+class _Mem:
+    """A memory of the queue under proof, as the harness writes and reads it: its name, the
+    width of its word, whether the producer gives its slot, whether it is written at an
+    item's start (the row engine's early memory) or with its last write, whether it is read
+    at the slot last taken (``current``), and its offset in the stream or the current port."""
+
+    def __init__(self, name, width, slotted, early, current, at):
+        self.name, self.width, self.slotted, self.early = name, width, slotted, early
+        self.current, self.at = current, at
+
+
 def _queue_memories(part):
-    """Per memory of the row queue: its name, the width of its word, whether the engine
-    gives its slot, whether it is written at a row's start, and its offset in the row."""
-    out, at = [], 0
-    for name, (fields, slotted) in part.memories.items():
+    out, at = [], {False: 0, True: 0}
+    for name, (fields, slotted, current) in part.memories.items():
         width = data.StructLayout(fields).size
-        out.append((name, width, slotted, name == "early", at))
-        at += width
+        out.append(_Mem(name, width, slotted, name == "early", current, at[current]))
+        at[current] += width
     return out
 
 
 def queue_harness(part, module, mutant=None, only=None):
-    """The Verilog of ``formal_top``: the row queue as ``module``, the engine that writes it
+    """The Verilog of ``formal_top``: the queue as ``module``, the producer that writes it
     (module docstring), the counts, the properties and their invariants, and ``mutant``
     between the queue's output and the harness."""
     F = part.o.payload.shape().size
     mems = _queue_memories(part)
+    held = [x for x in mems if x.current]
+    H = sum(x.width for x in held)
     D, T = part.depth, TAG
-    ports = "".join(f", .{n}__en({n}_en), .{n}__data({n}_data)"
-                    + (f", .{n}__addr({n}_addr)" if slotted else "")
-                    for n, _, slotted, _, _ in mems)
+    ports = "".join(f", .{x.name}__en({x.name}_en), .{x.name}__data({x.name}_data)"
+                    + (f", .{x.name}__addr({x.name}_addr)" if x.slotted else "")
+                    for x in mems)
+    ports += ", .current(current)" if held else ""
     L = ["`default_nettype none", "module formal_top(input wire clk);",
          "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;", "  wire rst = init;",
          "  (* anyseq *) reg start, written, o_ready, stop;",
-         "  wire space, d_space, d_valid, d_ready;", f"  wire [{F - 1}:0] d_payload;",
+         "  wire space, d_space, d_valid, d_ready, o_valid_next, pending;",
+         f"  wire [{F - 1}:0] d_payload;",
+         *([f"  wire [{H - 1}:0] current;"] if held else []),
          "  assign space = " + ("1'b1;" if mutant == "overrun" else "d_space;"),
          "  wire o_valid;", f"  wire [{F - 1}:0] o_payload;",
-         f"  reg [{COUNT - 1}:0] n_st = 0, n_wr = 0, n_out = 0;",
+         f"  reg [{COUNT - 1}:0] n_st = 0, n_wr = 0, n_out = 0;", "  reg any_out = 1'b0;",
          "  wire st_t = ~rst & start, wr_t = ~rst & written;",
          "  wire out_t = ~rst & o_valid & o_ready;",
-         # the engine: a row starts only on a credit; its last write follows its start
+         # the producer: an item starts only on a credit; its last write follows its start
          "  always @* if (!rst) begin env_start: assume(!start || space); "
          "env_written: assume(!written || n_wr != n_st); end",
-         "  always @(posedge clk) if (rst) begin n_st <= 0; n_wr <= 0; n_out <= 0; end "
-         "else begin n_st <= n_st + st_t; n_wr <= n_wr + wr_t; n_out <= n_out + out_t; end"]
-    for n, width, slotted, early, _ in mems:      # the tag in a word's low bits, the rest free
-        count = "n_st" if early else "n_wr"
-        L += [f"  (* anyseq *) reg [{width - 1}:0] {n}_free;",
-              f"  wire {n}_en = {'st_t' if early else 'wr_t'};",
-              f"  wire [{width - 1}:0] {n}_data = {{{n}_free[{width - 1}:{T}], "
+         "  always @(posedge clk) if (rst) begin n_st <= 0; n_wr <= 0; n_out <= 0; "
+         "any_out <= 0; end else begin n_st <= n_st + st_t; n_wr <= n_wr + wr_t; "
+         "n_out <= n_out + out_t; any_out <= any_out | out_t; end"]
+    for x in mems:                      # the tag in a word's low bits, the rest free
+        count = "n_st" if x.early else "n_wr"
+        L += [f"  (* anyseq *) reg [{x.width - 1}:0] {x.name}_free;",
+              f"  wire {x.name}_en = {'st_t' if x.early else 'wr_t'};",
+              f"  wire [{x.width - 1}:0] {x.name}_data = {{{x.name}_free[{x.width - 1}:{T}], "
               f"{count}[{T - 1}:0]}};"]
-        if slotted:
-            L += [f"  wire [3:0] {n}_addr = {count}[3:0];"]
+        if x.slotted:
+            L += [f"  wire [3:0] {x.name}_addr = {count}[3:0];"]
     L += [f"  {module} dut (.clk(clk), .rst(rst), .start(st_t), .written(wr_t), "
-          f".space(d_space){ports}, .o__valid(d_valid), .o__ready(d_ready), "
-          ".o__payload(d_payload));"]
-    L += mutated(None if mutant == "overrun" else mutant, F, mems[0][4])
-    L += [f"  reg [{F - 1}:0] past_out;", "  reg past_ostall = 1'b0;",
+          f".space(d_space), .o_valid_next(o_valid_next), .pending(pending){ports}, "
+          ".o__valid(d_valid), .o__ready(d_ready), .o__payload(d_payload));"]
+    streamed = [x for x in mems if not x.current]
+    L += mutated(None if mutant == "overrun" else mutant, F, streamed[0].at)
+    L += [f"  reg [{F - 1}:0] past_out;", "  reg past_ostall = 1'b0, past_vn = 1'b0;",
           "  always @(posedge clk) begin past_ostall <= ~rst & o_valid & ~o_ready; "
-          "past_out <= o_payload; end",
+          "past_out <= o_payload; past_vn <= ~rst & o_valid_next; end",
           f"  wire [{COUNT - 1}:0] n_held = n_st - n_out, n_level = n_wr - n_out;",
           "  reg [3:0] wait_n = 0;",
           "  always @(posedge clk) wait_n <= (~rst & n_level != 0 & o_ready & ~out_t) ? "
@@ -338,46 +356,62 @@ def queue_harness(part, module, mutant=None, only=None):
           "    if (past_ostall) begin held: assert(o_valid);",
           "      held_payload: assert(o_payload == past_out); end",
           f"    credit: assert(n_held <= {D});",
+          "    pending_count: assert(pending == (n_held != 0));",
+          "    valid_next: assert(d_valid == past_vn);",
           "    if (out_t) no_extra: assert(n_level != 0);",
-          *[f"    if (out_t) order_{n}: assert(o_payload[{at + T - 1}:{at}] == n_out[{T - 1}:0]);"
-            for n, _, _, _, at in mems],
+          *[f"    if (out_t) order_{x.name}: assert(o_payload[{x.at + T - 1}:{x.at}] == "
+            f"n_out[{T - 1}:0]);" for x in streamed],
+          *[f"    if (any_out) order_current_{x.name}: assert(current[{x.at + T - 1}:{x.at}] "
+            f"== n_out[{T - 1}:0] - 1'b1);" for x in held],
           "    drain: assert(wait_n <= 1);",
           f"    c_full: cover(n_held == {D});",
           "    c_wrap: cover(out_t && n_out == 17);",
           "    c_stall: cover(past_ostall && o_ready);",
           "  end"]
     # invariants: the queue's counts and pointers are the harness's; every word of a memory
-    # that a row started (or written) and not taken owns holds that row's tag
+    # that an item started (or written) and not taken owns holds that item's tag, and a
+    # current memory's word at the slot last taken holds the tag of the item taken last
     L += [f"  (* keep *) wire [{D.bit_length() - 1}:0] s_level, s_held;",
           "  (* keep *) wire s_valid;",
           "  (* keep *) wire [3:0] s_rptr;",
-          *[f"  (* keep *) wire [3:0] s_wptr_{n};" for n, _, slotted, _, _ in mems
-            if not slotted],
-          *[f"  (* keep *) wire [{w - 1}:0] s_{n}_{a};" for n, w, _, _, _ in mems
+          *(["  (* keep *) wire [3:0] s_cur;"] if held else []),
+          *[f"  (* keep *) wire [3:0] s_wptr_{x.name};" for x in mems if not x.slotted],
+          *[f"  (* keep *) wire [{x.width - 1}:0] s_{x.name}_{a};" for x in mems
             for a in range(16)],
           "  always @* if (!rst) begin",
           "    inv_counts: assert(s_level == n_level && s_held == n_held "
           "&& n_level <= n_held && s_rptr == n_out[3:0]);",
           f"    inv_flags: assert(s_valid == (n_level != 0) && space == (n_held < {D}));",
-          *[f"    inv_wptr_{n}: assert(s_wptr_{n} == {'n_st' if early else 'n_wr'}[3:0]);"
-            for n, _, slotted, early, _ in mems if not slotted]]
-    for n, _, _, early, _ in mems:
-        owned = "n_held" if early else "n_level"
+          *[f"    inv_wptr_{x.name}: assert(s_wptr_{x.name} == "
+            f"{'n_st' if x.early else 'n_wr'}[3:0]);" for x in mems if not x.slotted]]
+    if held:
+        L += ["    if (any_out) inv_cur: assert(s_cur == n_out[3:0] - 1'b1);"]
+    for x in mems:
+        owned = "n_held" if x.early else "n_level"
         for a in range(16):
             i = f"4'd{a} - n_out[3:0]"
-            L += [f"    if ({{{COUNT - 4}'d0, {i}}} < {owned}) inv_{n}_{a}: "
-                  f"assert(s_{n}_{a}[{T - 1}:0] == n_out[{T - 1}:0] + {{1'b0, {i}}});"]
+            L += [f"    if ({{{COUNT - 4}'d0, {i}}} < {owned}) inv_{x.name}_{a}: "
+                  f"assert(s_{x.name}_{a}[{T - 1}:0] == n_out[{T - 1}:0] + {{1'b0, {i}}});"]
+            if x.current:
+                L += [f"    if (any_out && {i} == 4'd15) inv_{x.name}_{a}_cur: "
+                      f"assert(s_{x.name}_{a}[{T - 1}:0] == n_out[{T - 1}:0] - 1'b1);"]
     L += ["  end", "endmodule"]
     return keep_only("\n".join(L) + "\n", only)
 
 
 def queue_wires(part):
     """The queue's registers and memory words the invariants read (``s_*``)."""
-    mems = _queue_memories(part)
-    return ([("s_level", "rq_level"), ("s_held", "rq_held"), ("s_valid", "rq_valid"),
-             ("s_rptr", "rq_rptr")]
-            + [(f"s_wptr_{n}", f"{n}_wptr") for n, _, slotted, _, _ in mems if not slotted]
-            + [(f"s_{n}_{a}", f"mem_{n}[{a}]") for n, *_ in mems for a in range(16)])
+    mems, n = _queue_memories(part), part.name
+    return ([("s_level", f"{n}_level"), ("s_held", f"{n}_held"), ("s_valid", f"{n}_valid"),
+             ("s_rptr", f"{n}_rptr")]
+            + ([("s_cur", f"{n}_cur")] if any(x.current for x in mems) else [])
+            + [(f"s_wptr_{x.name}", f"{x.name}_wptr") for x in mems if not x.slotted]
+            + [(f"s_{x.name}_{a}", f"mem_{x.name}[{a}]") for x in mems for a in range(16)])
+
+
+def setup_queue():
+    """The setup queue as the raster builds it with an overlapped setup."""
+    return _raster(setup_ii=SETUP_II).submodules.setup_queue
 
 
 def walker():
@@ -528,6 +562,7 @@ PARTS = {
     "row_queue": (row_queue, queue_harness, queue_wires, (*STREAM, "overrun")),
     "row_queue_serial": (lambda: row_queue(serial=True), queue_harness, queue_wires,
                          (*STREAM, "overrun")),
+    "setup_queue": (setup_queue, queue_harness, queue_wires, (*STREAM, "overrun")),
 }
 
 

@@ -26,7 +26,7 @@ from ..setup_unit.formats import (MODES, PRECISIONS, flat_fields, fragment_field
                                    triangle_fields)
 from ..unit import Unit
 from .plan import KNOBS, RANGES as PLAN_RANGES, RECIPS, RasterPlan
-from .row_queue import RowQueue
+from .queue import Queue
 from .span import channel_engine, row_engine, row_engine_serial, setup_queue
 from .walker import Walker, walker_constants, walker_inputs
 from .stepper import Stepper
@@ -113,15 +113,13 @@ class Raster(Unit):
             v = sc.inputs(inputs, copy=sc.aligned_copy)
             coef = setup.program(sc, v)
             coef.update({k: v[k] for k in flat})
-            sq_take = Signal()
             current = walker_constants(ch, flat)
-            coef, sq_valid, done_n, held, end = setup_queue(m, sc, coef, space, sq_take,
-                                                            current)
+            coef, sq, end = setup_queue(m, sc, coef, current)
             current = {k: coef[k] for k in current}
             sc.finish()
             sc.check()
-            m.d.comb += sq_take.eq(src_ready & sq_valid)
-            pending, consts = held.any(), None
+            m.d.comb += [space.eq(sq.space), sq.o.ready.eq(src_ready)]
+            done_n, pending, consts = sq.o_valid_next, sq.pending, None
         else:
             coef, done_n, pending, end, consts = self._one_at_a_time(m, sc, inputs, src_ready,
                                                                     flat, platform)
@@ -152,8 +150,8 @@ class Raster(Unit):
                                                   self.precision)
             writes = [("late", rows, written, None), ("early", early, re.start, None)]
             started, re_ii, re_length, re_busy = re.start, re.ii, re.length, re.busy()
-        m.submodules.row_queue = rq = RowQueue({
-            name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None)
+        m.submodules.row_queue = rq = Queue({
+            name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None, False)
             for name, vals, _, slot in writes})
         m.d.comb += [rq.start.eq(started), rq.written.eq(written), space.eq(rq.space)]
         for name, vals, en, slot in writes:

@@ -14,7 +14,7 @@ from amaranth.lib.memory import Memory
 from ..sched import OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
-from .row_queue import credits
+from .queue import Queue
 
 __all__ = ["row_engine", "row_engine_serial", "row_products", "setup_queue", "channel_engine"]
 
@@ -334,18 +334,16 @@ def _turns(m, sc, name, channels, first):
     return sel, index, under
 
 
-def setup_queue(m, sc, values, space, take, current=(), depth=15):
+def setup_queue(m, sc, values, current=(), depth=15):
     """The setup's results, a triangle's a slot of distributed RAM, between an overlapped
-    setup (``sc``, a schedule with an interval) and the walker, with credits: the setup
-    starts a triangle only while ``space`` (a register) promises a slot, so it never stalls.
-    The slot is counted at the start and travels with the triangle (``sq_slot`` and its late
-    copies); each value is written as soon as it is ready, into one of a few memories that
-    each take the values ready within an interval of each other, so no value is kept in a
-    copy for this. Returns ``(values, valid, valid_next, held, offset)``, ``offset`` the one
-    at which the last memory is written; the caller drives ``take`` (only while valid).
-    ``current``: names of values read at the slot last taken, for as long as it is the last
-    (the walker's constants, read in place while it walks that triangle): that slot stays
-    out of use until the next is taken, so ``depth`` is 15 of the 16."""
+    setup (``sc``, a schedule with an interval) and the walker: a :class:`Queue` whose
+    credit (``space``) the setup's start waits for, so it never stalls. The slot is counted
+    at the start and travels with the triangle (``sq_slot`` and its late copies); each value
+    is written as soon as it is ready, into one of a few memories that each take the values
+    ready within an interval of each other, so no value is kept in a copy for this.
+    ``current``: names of values read at the slot last taken (the walker's constants, read in
+    place while it walks that triangle). Returns ``(values, queue, offset)``, ``offset`` the
+    one at which the last memory is written."""
     slots = Signal(4, name="sq_slots")                   # 4-bit pointers wrap at 16
     m.d.sync += slots.eq(slots + sc.start)
     slot = sc.input("sq_slot", slots)
@@ -356,23 +354,21 @@ def setup_queue(m, sc, values, space, take, current=(), depth=15):
         if not groups or k in current and not groups[-1][2] or at >= groups[-1][0] + sc.ii:
             groups.append([at, {}, k in current])
         groups[-1][1][k] = keep[k]
-    rptr, cur = Signal(4, name="sq_rptr"), Signal(4, name="sq_cur")
-    out = {k: x for k, x in values.items() if isinstance(x, Const)}
-    offset = 0
+    offset, memories, writes = 0, {}, []
     for g, (_, vals, now) in enumerate(groups):
         at = max(sc.when(x) for x in vals.values())
         offset = max(offset, at)
-        mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
-        m.submodules[f"setup_queue{g}"] = mem
-        wr, rd = mem.write_port(), mem.read_port(domain="comb")
         data = sc.late_at(Cat(*vals.values()), at)
         sc.read(at, data)
-        m.d.comb += [wr.addr.eq(sc.late(slot, at)), wr.data.eq(data), wr.en.eq(sc.at(at)),
-                     rd.addr.eq(cur if now else rptr)]
-        out.update(_fields(rd.data, vals))
-    valid, valid_next, held = credits(m, "sq", sc.start, sc.at(offset), take, space, depth)
-    with m.If(take):
-        m.d.sync += [rptr.eq(rptr + 1), cur.eq(rptr)]
-    return out, valid, valid_next, held, offset
-
-
+        memories[f"g{g}"] = ({k: Value.cast(x).shape() for k, x in vals.items()}, True, now)
+        writes.append((f"g{g}", data, sc.at(at), sc.late(slot, at)))
+    m.submodules.setup_queue = q = Queue(memories, depth, name="sq")
+    m.d.comb += [q.start.eq(sc.start), q.written.eq(sc.at(offset))]
+    for name, data, en, addr in writes:
+        port = getattr(q, name)
+        m.d.comb += [port.en.eq(en), port.addr.eq(addr), port.data.eq(data)]
+    out = {k: x for k, x in values.items() if isinstance(x, Const)}
+    out.update({k: q.o.payload[k] for k, _ in q.o.payload.shape()})
+    if current:
+        out.update({k: q.current[k] for k, _ in q.current.shape()})
+    return out, q, offset
