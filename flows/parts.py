@@ -58,6 +58,7 @@ edge-function model). Against the triangle walked, the rows visited and the row 
 ``python -m flows.parts [--only row_queue]``; ``make formal`` runs it too.
 """
 import argparse
+import functools
 import json
 import re
 
@@ -109,7 +110,9 @@ def row_queue(serial=False):
     return _raster(**({"row_serial": 1} if serial else {})).submodules.row_queue
 
 
+@functools.lru_cache(maxsize=8)
 def export(part, module):
+    """The part's Verilog (once per part and name: every check of a part runs on it)."""
     return verilog.convert(part, name=module, emit_src=False)
 
 
