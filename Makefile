@@ -79,6 +79,8 @@ fpga: setup
 # method and bump method: the one-row units by k-induction, the raster and the pipelines by
 # bounded model checks; covers, and the mutants each property must
 # catch: build/formal/formal.{md,json}. make formal [ONLY=raster,scene_linear,stepper] [TIMEOUT=s]
+# (ONLY=raster: its held proof, covers and mutants and its parts' proofs; ONLY=raster_bmc: the
+# whole raster's BMC, over an hour)
 ONLY    ?=
 TIMEOUT ?=
 formal: setup
