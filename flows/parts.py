@@ -430,14 +430,25 @@ def _copies(part):
     return sorted(set(re.findall(r"\bw_full(\w+)\b", text)) - {"0"})
 
 
+def _members(port, names):
+    """The walker's fields of a triangle or a row, laid out one after another as a bus of
+    the harness."""
+    out, at = {}, 0
+    for k in names:
+        shape = getattr(port, k).shape()
+        out[k] = (at, shape.width, shape.signed)
+        at += shape.width
+    return out
+
+
 def walker_harness(part, module, mutant=None, only=None):
     """The Verilog of ``formal_top``: the walker as ``module``; free triangles from a setup
     that keeps its valid and payload until they are taken (the valid the register of the
     early one), each tagged ``tri`` with its count, with rows ``j0 .. j0 + to_j1`` on the
     screen unless culled or empty; the reference (the triangle walked, the rows visited, the
     row owed); the properties and their invariants; ``mutant`` on the rows' stream."""
-    ins, rows = _fields(part.i.payload.shape()), _fields(part.o.payload.shape())
-    W, F = part.i.payload.shape().size, part.o.payload.shape().size
+    ins, rows = _members(part.i, part.inputs), _members(part.o, part.outputs)
+    W, F = (sum(w for _, w, _ in x.values()) for x in (ins, rows))
     sl = lambda fields, bus, k: f"{bus}[{fields[k][0] + fields[k][1] - 1}:{fields[k][0]}]"
     size = 1 << part.w.screen_bits
     C = COUNT
@@ -450,8 +461,10 @@ def walker_harness(part, module, mutant=None, only=None):
          "  wire d_valid, d_ready;", f"  wire [{F - 1}:0] d_payload;",
          "  wire o_valid;", f"  wire [{F - 1}:0] o_payload;",
          f"  {module} dut (.clk(clk), .rst(rst), .i__valid(i_valid), .i__ready(i_ready), "
-         ".i_valid_next(i_valid_next), .i__payload(i_payload), .o__valid(d_valid), "
-         ".o__ready(d_ready), .o__payload(d_payload), .culled(culled), .busy(busy));",
+         ".i_valid_next(i_valid_next), "
+         + "".join(f".i__{k}({sl(ins, 'i_payload', k)}), " for k in ins)
+         + "".join(f".o__{k}({sl(rows, 'd_payload', k)}), " for k in rows)
+         + ".o__valid(d_valid), .o__ready(d_ready), .culled(culled), .busy(busy));",
          f"  reg [{C - 1}:0] n_in = 0, n_cull = 0;",
          "  wire in_t = ~rst & i_valid & i_ready;",
          f"  wire [{ins['to_j1'][1] - 1}:0] f_to_j1 = {sl(ins, 'free', 'to_j1')};",

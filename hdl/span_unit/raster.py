@@ -134,10 +134,10 @@ class Raster(Unit):
         m.d.sync += src_valid.eq(done_n)   # walker loads from done_n, a clock early)
         m.d.comb += [wk.i.valid.eq(src_valid), wk.i_valid_next.eq(done_n),
                      src_ready.eq(wk.i.ready)]
-        m.d.comb += [wk.i.payload[k].eq(x) for k, x in ins.items()]
+        m.d.comb += [getattr(wk.i, k).eq(x) for k, x in ins.items()]
         if current:
             m.d.comb += [wk.current[k].eq(x) for k, x in current.items()]
-        rows, rows_in = {k: wk.o.payload[k] for k, _ in wk.o.payload.shape()}, wk.o
+        rows, rows_in = {k: getattr(wk.o, k) for k in wk.outputs}, wk.o
         if self.plan.row_serial:
             writes, started, written, re = row_engine_serial(
                 m, w, setup.modes, rows, rows_in, space, platform, flat,
