@@ -7,9 +7,14 @@ Phi = f + u t1 + v t2 with t1 = d + a u + c v and t2 = e + b v (seed 000 eq 17),
 first difference dd = P0 + Pu u + Pv v; the stepper then adds dd and 2A per pixel (eq 22).
 Here every product's operands are rounded to M-bit signed mantissas: u and v with M - 2
 fraction bits (they lie in [0, 1] at a pixel inside the triangle), and each group of
-coefficients, (a..f), t1, t2, (P0, Pu, Pv) and 2A, at the exponent of its largest magnitude
-on that triangle. Products and sums are exact (the accumulators are adders, as wide as the
-bound needs). The error at each fragment is against the same float model's Phi, in LSBs of
+coefficients, (a..e), (P0, Pu, Pv) and 2A, at the exponent of its largest magnitude on that
+triangle, and a row's t1, t2 at theirs. f, only added, keeps its fixed point. Products and
+sums are exact (the accumulators are adders, as wide as the bound needs). ``bound`` derives
+each triangle's error from its exponents and its widest chord, so a setup can choose per
+triangle: within half an LSB, the narrow path (each product one 18 x 18 block); beyond it,
+wide products. The first table gives the share on the narrow path and checks the bound
+against the emulation; the second counts the MULT18X18D that issue 49's rates need on each
+mesh, today and with the narrow path (``blocks``). The error at each fragment is against the same float model's Phi, in LSBs of
 the output (2^-14); the tests' bound is one LSB after rounding, so half an LSB is what the
 arithmetic may spend.
 
@@ -19,7 +24,7 @@ horizontal chord (at the middle vertex's row); so dd scales as 1 / W and 2A as 1
 while a span is at most W + 1 pixels long. A triangle with W < 1 (a sliver across the rows)
 has spans of one pixel: its dd and 2A are never used.
 
-A second table weighs the other direction, row starts by additions (forward differences
+A third table weighs the other direction, row starts by additions (forward differences
 along the left edge): per mesh, the rows and fragments a triangle brings, which set how many
 products a row engine spends per triangle against a setup's, and K, how far the (u, v) of a
 triangle's fragments move from its first fragment's along x and y before they cancel
@@ -39,13 +44,18 @@ from sim.verilog import SCENES
 MESHES = [("default torus, 12 x 12 segments", "default", None),
           ("wuson (OBJ)", "wuson", None),
           ("torus, 64 x 64 segments, 256 x 256", "default", [64, 64])]
+
 MANTISSAS = (18, 20, 22, 25)
+# issue 49's targets: fragments per clock on each mesh, and the raster's MULT18X18D
+TARGETS = dict(zip((label for label, _, _ in MESHES), (0.95, 0.75, 0.75)))
+WIDE = 4                       # a product of 35-bit operands: four 18 x 18 blocks (or passes)
 
 
 def _quant(x, exp, m):
     """``x`` rounded to an m-bit signed mantissa at the exponent ``exp`` (|x| < 2^exp)."""
     step = 2.0 ** (exp - (m - 1))
-    return np.rint(x / step) * step
+    with np.errstate(invalid="ignore"):                  # culled triangles: NaN
+        return np.rint(x / step) * step
 
 
 def _exp(*groups):
@@ -55,14 +65,14 @@ def _exp(*groups):
 
 
 def errors(inputs, m, screen_bits, sub_bits, modes):
-    """Per fragment and quadratic channel, |Phi emulated - Phi float| in LSBs (2^-14), and
-    per triangle the widest chord W."""
+    """Per fragment, |Phi emulated - Phi float| in LSBs (2^-14), the worst quadratic channel;
+    per triangle the widest chord W and the derived bound (:func:`bound`, LSBs, the worst
+    quadratic channel); and each fragment's triangle."""
     channels = len(modes)
     x, y = R._vertices(inputs)
     tri, px, py = R.coverage(x, y, sub_bits, screen_bits)
     st = R.sorted_triangles(inputs, channels, sub_bits)
-    np.seterr(divide="ignore", invalid="ignore")           # culled triangles: Omega = 0
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):    # culled triangles: Omega = 0
         omega = q.omega(st["x1"], st["y1"], st["x2"], st["y2"])
         width = np.abs(omega) / st["y2"]
         ux, vx = st["y2"] / omega, -st["y1"] / omega          # du/dx, dv/dx a pixel
@@ -78,28 +88,53 @@ def errors(inputs, m, screen_bits, sub_bits, modes):
         ue, ve = q.uv_of(g["x1"], g["y1"], g["x2"], g["y2"], px + 0.5 - st["x0"][tri],
                          py + 0.5 - st["y0"][tri])
     uq, vq = (np.rint(w * 2.0 ** (m - 2)) * 2.0 ** -(m - 2) for w in (u, v))
-    out = []
+    out, bounds = [], [np.zeros(len(omega))]
     for ch, mode in enumerate(modes):
         if mode == "linear":
             continue
         I = [st["values"][ch][:, k] for k in range(3)]
         coef = R.channel_uv(mode, I, st["e"])                       # (n, 6): a..f
         a, b, c, d, e, f = coef.T
-        A = a * ux * ux + b * vx * vx + c * ux * vx
-        Pu, Pv, P0 = 2 * a * ux + c * vx, 2 * b * vx + c * ux, A + d * ux + e * vx
-        e0, e1, e2 = _exp(a, b, c, d, e, f), _exp(P0, Pu, Pv), _exp(2 * A)
-        qa, qb, qc, qd, qe, qf = (_quant(z, e0, m)[tri] for z in (a, b, c, d, e, f))
+        with np.errstate(invalid="ignore"):
+            A = a * ux * ux + b * vx * vx + c * ux * vx
+            Pu, Pv, P0 = 2 * a * ux + c * vx, 2 * b * vx + c * ux, A + d * ux + e * vx
+        e0, e1, e2 = _exp(a, b, c, d, e), _exp(P0, Pu, Pv), _exp(2 * A)
+        bounds.append(bound(m, e0, e1, e2, width))
+        qa, qb, qc, qd, qe = (_quant(z, e0, m)[tri] for z in (a, b, c, d, e))
         t1 = qd + qa * uq + qc * vq
         t2 = qe + qb * vq
-        et = _exp(t1, t2)
-        phi0 = qf + uq * _quant(t1, et, m) + vq * _quant(t2, et, m)
+        et = _exp(t1, t2)                                  # a row's: at most e0 + 2
+        phi0 = f[tri] + uq * _quant(t1, et, m) + vq * _quant(t2, et, m)
         dd = (_quant(P0, e1, m)[tri] + _quant(Pu, e1, m)[tri] * uq
               + _quant(Pv, e1, m)[tri] * vq)
         phi = phi0 + i * dd + i * (i - 1) / 2 * _quant(2 * A, e2, m)[tri]
         exact = q.eval_uv(coef[tri], ue, ve)
         out.append(np.abs(phi - exact) / VALUE.lsb)
     err = np.max(out, 0) if out else np.zeros(len(tri))
-    return tri, err, width
+    return tri, err, width, np.max(bounds, 0)
+
+
+def bound(m, e0, e1, e2, width):
+    """The error at a triangle's fragments, derived from its exponents, in LSBs (2^-14):
+    what a setup could test to pick the narrow path. e(x) = 2^(x - m) is half a mantissa's
+    step at exponent x, r = 2^-(m-1) the rounding of u and v, and u, v >= 0, u + v <= 1 at a
+    span's first pixel centre:
+    - f is added, never multiplied: exact.
+    - t1 = d + a u + c v: d is off by e(e0), a u by e(e0) u + |a| r <= 3 e(e0), c v too;
+      |t1| <= 2^e0 (1 + u + v) < 2^(e0+2), so its rounding is 4 e(e0): 11 e(e0) in all.
+      t2 = e + b v: 8 e(e0).
+    - u t1 + v t2: u, v times those, at most 11 e(e0); and (uq - u) t1, (vq - v) t2 with
+      |t1|, |t2| <= 2^(e0+1), r 2^(e0+1) = 4 e(e0) each: Phi at the start 19 e(e0).
+    - The first difference P0 + Pu u + Pv v: e(e1) + 2 (e(e1) + 2^e1 r) = 7 e(e1); 2A e(e2).
+      After i steps: i 7 e(e1) + i (i - 1) / 2 e(e2), i <= floor(W): a row has at most
+      floor(W) + 1 pixel centres, W the widest chord.
+    The products of two roundings are below a factor 1 + 2^-(m-3) of the sum."""
+    eps = lambda x: 2.0 ** (x - m)
+    with np.errstate(invalid="ignore"):
+        n = np.floor(np.nan_to_num(width, nan=0.0, posinf=0.0))
+    with np.errstate(invalid="ignore"):
+        total = 19 * eps(e0) + 7 * n * eps(e1) + n * (n - 1) / 2 * eps(e2)
+    return total * (1 + 2.0 ** -(m - 3)) / VALUE.lsb
 
 
 def additions(inputs, screen_bits, sub_bits, channels):
@@ -124,6 +159,31 @@ def additions(inputs, screen_bits, sub_bits, channels):
     return per[drawn], width[drawn], len(tri), rows, len(st["x1"])
 
 
+def blocks(inputs, m, screen_bits, sub_bits, modes, rate):
+    """The 18 x 18 blocks a raster needs to draw ``inputs`` at ``rate`` fragments a clock,
+    counting block-clocks per triangle in: today (the setup's products that fit 18 x 18 one
+    block-clock, the rest and every row product ``WIDE``), and with a narrow path (every
+    setup product one, assumed: its exponents are not measured; a row's products one on a
+    triangle whose derived bound at m bits is within half an LSB, ``WIDE`` passes on the
+    others). Returns (narrow share of rows, blocks today, blocks with the path)."""
+    from hdl.span_unit.plan import RasterPlan
+    from hdl.span_unit.span import row_products
+    plan = RasterPlan.from_params(screen_bits=screen_bits, sub_bits=sub_bits,
+                                  channels=len(modes), modes=",".join(modes))
+    setup, fits = plan.setup_products
+    per_row = row_products(modes)
+    tri, _, _, bnd = errors(inputs, m, screen_bits, sub_bits, modes)
+    x, y = R._vertices(inputs)
+    _, _, py = R.coverage(x, y, sub_bits, screen_bits)
+    rows = np.unique(tri.astype(np.int64) * (2 << screen_bits) + py) // (2 << screen_bits)
+    n = len(x)
+    narrow = bnd[rows] <= 0.5
+    clocks = len(tri) / rate                                    # all triangles' share
+    today = (n * (fits + WIDE * (setup - fits)) + len(rows) * per_row * WIDE) / clocks
+    path = (n * setup + per_row * (narrow.sum() + WIDE * (~narrow).sum())) / clocks
+    return narrow.mean(), int(np.ceil(today)), int(np.ceil(path))
+
+
 def _scene_inputs(name, segments):
     scene = S.load(SCENES / f"{name}.toml")
     if segments:
@@ -146,21 +206,28 @@ def main():
         cases.append((f"random screen-sized, {1 << bits} x {1 << bits}", big, bits, 4,
                       ("xshading", "xshading")))
     print("| triangles | drawn | W < 1 (slivers) | "
-          + " | ".join(f"max error, {m} bits (LSB)" for m in MANTISSAS)
-          + " | triangles over 1/2 LSB at 18 bits |")
+          + " | ".join(f"{m} bits: max error (LSB), narrow path" for m in MANTISSAS)
+          + " | worst error / bound |")
     print("| --- | --- | --- | " + " | ".join("---" for _ in MANTISSAS) + " | --- |")
     for label, inputs, sb, sub, modes in cases:
-        cells, over = [], None
+        cells, ratio = [], 0.0
         for m in MANTISSAS:
-            tri, err, width = errors(inputs, m, sb, sub, modes)
-            cells.append(f"{err.max():.3g}" if len(err) else "-")
-            if m == MANTISSAS[0]:
-                bad = np.unique(tri[err > 0.5])
-                drawn = np.unique(tri)
-                over = f"{len(bad)} of {len(drawn)}"
-                slivers = f"{(width[drawn] < 1).mean() * 100:.1f} %"
+            tri, err, width, bnd = errors(inputs, m, sb, sub, modes)
+            drawn = np.unique(tri)
+            narrow = (bnd[drawn] <= 0.5).mean() * 100     # the arithmetic's half LSB
+            cells.append(f"{err.max():.3g}, {narrow:.1f} %")
+            ratio = max(ratio, (err / np.maximum(bnd[tri], 1e-300)).max())
+        slivers = f"{(width[drawn] < 1).mean() * 100:.1f} %"
         print(f"| {label} | {len(drawn):,} | {slivers} | " + " | ".join(cells)
-              + f" | {over} |")
+              + f" | {ratio:.3f} |")
+    print("\n| mesh | target (fragments / clock) | MULT18X18D today | "
+          + " | ".join(f"{m} bits: rows on the narrow path, MULT18X18D" for m in (18, 20))
+          + " |")
+    print("| --- | --- | --- | --- | --- |")
+    for label, inputs, sb, sub, modes in cases[:len(MESHES)]:
+        got = [blocks(inputs, m, sb, sub, modes, TARGETS[label]) for m in (18, 20)]
+        print(f"| {label} | {TARGETS[label]} | {got[0][1]} | "
+              + " | ".join(f"{s * 100:.1f} %, {b}" for s, _, b in got) + " |")
     print("\n| triangles | in | fragments / triangle in | rows / triangle in | K median | "
           "K p99 | K max | K > 64 |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
