@@ -138,18 +138,12 @@ class Raster(Unit):
         if current:
             m.d.comb += [wk.current[k].eq(x) for k, x in current.items()]
         rows, rows_in = {k: getattr(wk.o, k) for k in wk.outputs}, wk.o
-        if self.plan.row_serial:
-            writes, started, written, re = row_engine_serial(
-                m, w, setup.modes, rows, rows_in, space, platform, flat,
-                self.plan.row_serial, consts, self.precision)
-            re_ii, re_length, re_busy = re["ii"], re["length"], re["busy"]
-        else:
-            rows, early, re, written = row_engine(m, w, setup.modes, rows, rows_in, space,
-                                                  platform, flat,
-                                                  self.plan.row_mults or ch + 1,
-                                                  self.precision)
-            writes = [("late", rows, written, None), ("early", early, re.start, None)]
-            started, re_ii, re_length, re_busy = re.start, re.ii, re.length, re.busy()
+        # the row engine: every channel a job, or one channel a job (``row_serial``)
+        engine = row_engine_serial if self.plan.row_serial else row_engine
+        writes, started, written, re = engine(
+            m, w, setup.modes, rows, rows_in, space, platform, flat,
+            self.plan.row_serial or self.plan.row_mults or ch + 1, consts, self.precision)
+        re_ii, re_length, re_busy = re["ii"], re["length"], re["busy"]
         m.submodules.row_queue = rq = Queue({
             name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None, False)
             for name, vals, _, slot in writes})

@@ -20,17 +20,19 @@ __all__ = ["row_engine", "row_engine_serial", "row_products", "setup_queue", "ch
 
 
 def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None,
-               precision=None):
+               consts=None, precision=None):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
     d = P0 + Pu u + Pv v: seven products, two for a linear channel (a = b = c = 0, so
     Phi = f + u d + v e and d = P0). The engine never stalls: a row starts only when
-    ``space`` (a register of the row queue) promises a place for it. Returns the row values
-    for the stepper (computed, and ``early``: what the engine only carries, which the row
-    queue takes at the row's start), the schedule and the output's valid bit. ``precision``:
-    each channel's fraction bits out; its Phi, d and 2A go into the queue floored to
-    ``w.fi`` of it."""
+    ``space`` (a register of the row queue) promises a place for it. ``precision``: each
+    channel's fraction bits out; its Phi, d and 2A go into the queue floored to ``w.fi`` of
+    it. Returns what :func:`row_engine_serial` returns: the writes into the row queue
+    (``late``, the row values computed, and ``early``, what the engine only carries, taken at
+    the row's start), the row's start, its last write and the timing. ``consts`` is the
+    serial engine's (the setup's channels in turn need it), so none here."""
+    assert consts is None, "the channel-constant memory is read by the serial engine only"
     channels = len(modes)
     precision = precision or (VALUE.frac_bits,) * channels
     cut = [VALUE.frac_bits - p for p in precision]     # bits below the channel's FI
@@ -111,7 +113,8 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     m.d.sync += out_valid.eq(sc.at(end))
     sc.finish()
     sc.check()
-    return out, early, sc, out_valid
+    writes = [("late", out, out_valid, None), ("early", early, sc.start, None)]
+    return writes, sc.start, out_valid, {"ii": sc.ii, "length": sc.length, "busy": sc.busy()}
 
 
 def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=3,
