@@ -414,7 +414,9 @@ def queue_wires(part):
 
 def setup_queue():
     """The setup queue as the raster builds it with an overlapped setup."""
-    return _raster(setup_ii=SETUP_II).submodules.setup_queue
+    setup = _raster(setup_ii=SETUP_II).submodules.setup.elaborate(None)
+    Fragment.get(setup, None)
+    return setup.submodules.setup_queue
 
 
 def walker():

@@ -179,7 +179,7 @@ class Setup:
     def program(self, sc, v, in_turn=False):
         """The setup of one triangle on schedule ``sc`` from the input registers ``v``;
         returns the walker's values (registers). ``in_turn``: the channels are left to
-        :meth:`channel_job` (``span.channel_engine``); instead of their constants, the values
+        :meth:`channel_job` (``setup_engine.channel_engine``); instead of their constants, the values
         its jobs read: each channel's sorted ``i{ch}_0..2``, each group's ``e12 e13 e23``, and
         ``au``, ``av``."""
         w, S = self.w, 1 << self.w.sub_bits
@@ -279,7 +279,7 @@ class Setup:
         return edge_names(self.groups[ch])[0][3:]
 
     def channel_job(self, sc, v):
-        """One channel's constants on a schedule of its own (``span.channel_engine``: the
+        """One channel's constants on a schedule of its own (``setup_engine.channel_engine``: the
         channels in turn): a..f by X-shading (seed 001 eq 32), then the span's constants
         (eq 22), from the job's inputs: ``i0_0..2``, the edge constants of channel 0's group's
         names (0 for a linear channel: then a = b = c = 0 and every other sum is a linear

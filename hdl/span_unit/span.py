@@ -1,22 +1,21 @@
 """The span engine (seeds 000, 001): edge walking, span-start evaluation, forward differences.
 
-The row engines, and the setup's queue and channel engine; the walker
-(``hdl/span_unit/walker.py``), the row queue and the stepper are components of their own.
+The row engines; the setup (``setup_engine.py``), the walker (``walker.py``), the row queue
+and the stepper are components of their own.
 
 - ``row_engine`` (a schedule on shared multipliers, a row every ``ii`` clocks): (u, v) from
   the numerators times the reciprocal, then per channel Phi(u, v) (eq 17) and its first
   difference along x, Pu u + Pv v + P0. Exact numerators: rounding never accumulates across
   rows.
 """
-from amaranth.hdl import Const, Signal, Value, unsigned
+from amaranth.hdl import Const, Signal, unsigned
 from amaranth.lib.memory import Memory
 
 from ..sched import OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
-from .queue import Queue
 
-__all__ = ["row_engine", "row_engine_serial", "row_products", "setup_queue", "channel_engine"]
+__all__ = ["row_engine", "row_engine_serial", "row_products", "split_fields", "turns"]
 
 
 def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None,
@@ -72,7 +71,7 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
         sc.read(k, addr)
         m.d.comb += [wr.addr.eq(wptr), wr.data.eq(Cat(*vals.values())), wr.en.eq(sc.start),
                      rd.addr.eq(addr)]
-        return {n[len(f"c{ch}_"):]: x for n, x in _fields(rd.data, vals).items()}
+        return {n[len(f"c{ch}_"):]: x for n, x in split_fields(rd.data, vals).items()}
     # the inputs are captured at every slot a job may start in (``aligned``, not the start:
     # safe, since no job reads an input more than ``ii`` clocks after its start), from copies
     v = sc.inputs({k: x for k, x in rows.items() if k not in carried}, copy=sc.aligned_copy)
@@ -129,9 +128,9 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     its channel's constants, picked by a one-hot channel register) and recomputes u and v
     (nine products, four with no quadratic channel); the walker's row is taken at the last
     channel's start, so it and the triangle's constants stay steady while the jobs read
-    them. ``consts``: the channel-constant memory of ``channel_engine`` and the slot the
-    walker reads (``(consts, slot)``), read at the next job's channel in place of the
-    walker's registers. ``precision``: as :func:`row_engine`'s (a job's rounding half is its
+    them. ``consts``: the setup's channel-constant memory (``setup_engine.channel_engine``)
+    as ``(index, fields, bits)``: the port that names the channel it reads, and its fields,
+    read at the next job's channel in place of the walker's registers. ``precision``: as :func:`row_engine`'s (a job's rounding half is its
     channel's). Returns the writes into the row queue (``(name, values, enable, slot)``), the
     last job's start (the queue's credit), its write, and the timing."""
     channels = len(modes)
@@ -140,7 +139,7 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     quad = any(mode != "linear" for mode in modes)
     ii = -(-(9 if quad else 4) // mults)
     sc = Schedule(m, "rs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
-    sel, index, under = _turns(m, sc, "rs", channels, row_link.valid & space)   # next job's
+    sel, index, under = turns(m, sc, "rs", channels, row_link.valid & space)   # next job's
     slot = Signal(4, name="rs_slot")           # the row's place in the row queue (4 bits wrap)
     m.d.comb += row_link.ready.eq(sc.aligned & sel[-1] & (under | space))
     with m.If(sc.start & sel[-1]):
@@ -156,9 +155,9 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
         pick = {k: _or_tree([Mux(sel[c], rows[f"c{c}_{k}"], 0) for c in range(channels)])
                 for k in keys}
     else:
-        mem, rslot = consts
-        m.d.comb += mem["port"].addr.eq(Cat(index[:mem["bits"]], rslot))
-        pick = {k: mem["fields"][k] for k in keys}
+        port, fields, bits = consts
+        m.d.comb += port.eq(index[:bits])
+        pick = {k: fields[k] for k in keys}
     row_keys = ("xl", "xr", "E_u", "E_v", "B_u", "B_v", "rs", "sh")
     v = sc.inputs({**{k: rows[k] for k in row_keys}, **pick, "slot": slot, "sel": Cat(*sel)},
                   copy=sc.aligned_copy)
@@ -253,7 +252,7 @@ def row_products(modes):
     return 2 + sum(2 if mode == "linear" else 7 for mode in modes)
 
 
-def _fields(data, like):
+def split_fields(data, like):
     """``data`` cut into the fields of ``like`` (a dict of values), in its order."""
     out, at = {}, 0
     for k, x in like.items():
@@ -263,66 +262,7 @@ def _fields(data, like):
     return out
 
 
-def channel_engine(m, setup, src, go, wslot, platform=None, mults=1, host=None):
-    """The setup's channels in turn: one datapath on ``mults`` wide multipliers computes one
-    channel's constants per job (``Setup.channel_job``: a..f, Pu, Pv, P0 and 2A), a job every
-    ``ii = ceil(11 / mults)`` clocks, the first at ``go`` (a pulse, with the engine idle), so a
-    further channel costs ``ii`` clocks per triangle, not registers or multipliers. Each job
-    captures its channel's inputs from the setup's held registers ``src`` (picked by a
-    one-hot channel register) and writes a..f, Pu, Pv and P0 into the channel-constant memory
-    (distributed RAM, a channel's constants a word: ``2 x 2**ceil(log2 channels)`` words, two
-    triangles' worth), at slot ``wslot`` (the one the walker does not read), and 2A into a
-    register per channel (the walker holds it for the row queue). ``host``: ``(schedule,
-    index)``, the setup's multiplier that is this engine's first (``Schedule``'s ``host``:
-    the jobs then run after the setup's last product). Returns the memory's read port with
-    its fields, the registers of 2A, the last job's write (the setup's end) and the
-    timing."""
-    channels, modes = setup.channels, setup.modes
-    ii = -(-11 // mults)
-    sc = Schedule(m, "cs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform,
-                  host=host)
-    sel, index, under = _turns(m, sc, "cs", channels, go)
-    pick = lambda key: _or_tree([Mux(sel[c], src[key(c)], 0) for c in range(channels)])
-    quad = [c for c, mode in enumerate(modes) if mode != "linear"]
-    s0 = setup.suffix(0)
-    vals = {f"i0_{k}": pick(lambda c: f"i{c}_{k}") for k in range(3)}
-    # a linear channel's edge constants are 0: its a, b, c come out 0, so its sums are linear
-    vals.update({f"{e}{s0}": _or_tree([Mux(sel[c], src[f"{e}{setup.suffix(c)}"], 0)
-                                        for c in quad] or [Const(0, 1)])
-                 for e in ("e12", "e13", "e23")})
-    vals.update(au=src["au"], av=src["av"], slot=wslot, index=index, sel=Cat(*sel))
-    v = sc.inputs(vals, copy=sc.aligned_copy)
-    out = setup.channel_job(sc, v)
-    keys = ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")
-    end = sc.when(*out.values())
-    data = {k: sc.late_at(out[k], end) for k in (*keys, "a2")}
-    slot, idx, chan = (sc.late(v[k], end) for k in ("slot", "index", "sel"))
-    sc.read(end, *data.values(), slot, idx, chan)
-    en = sc.at(end)
-    bits = max(1, (channels - 1).bit_length())
-    words = {k: data[k] for k in keys}
-    mem = Memory(shape=unsigned(sum(len(x) for x in words.values())), depth=2 << bits, init=[])
-    m.submodules["channel_consts"] = mem
-    wr, rd = mem.write_port(), mem.read_port(domain="comb")
-    m.d.comb += [wr.addr.eq(Cat(idx[:bits], slot)), wr.data.eq(Cat(*words.values())),
-                 wr.en.eq(en)]
-    a2 = {}
-    for c in range(channels):
-        a2[f"c{c}_a2"] = r = Signal.like(Value.cast(data["a2"]), name=f"cs_a2_{c}",
-                                         reset_less=True)
-        with m.If(en & chan[c]):
-            m.d.sync += r.eq(data["a2"])
-    last = Signal(name="cs_written")
-    m.d.comb += last.eq(en & chan[-1])
-    sc.finish()
-    sc.check()
-    busy = Signal(name="cs_busy")
-    m.d.comb += busy.eq(sc.busy() | under)
-    consts = {"port": rd, "bits": bits, "fields": _fields(rd.data, words)}
-    return consts, a2, last, {"ii": ii, "end": (channels - 1) * ii + end, "busy": busy}
-
-
-def _turns(m, sc, name, channels, first):
+def turns(m, sc, name, channels, first):
     """The channel of the next job of ``sc`` (a schedule with an interval), one-hot and as an
     index: a row's (or triangle's) jobs start with ``first`` and go on every ``ii`` clocks,
     one a channel. Returns ``(sel, index, under)``, ``under`` high between its first and its
@@ -335,43 +275,3 @@ def _turns(m, sc, name, channels, first):
         m.d.sync += [sel[c].eq(sel[c - 1]) for c in range(channels)]
         m.d.sync += index.eq(Mux(sel[-1], 0, index + 1))
     return sel, index, under
-
-
-def setup_queue(m, sc, values, current=(), depth=15):
-    """The setup's results, a triangle's a slot of distributed RAM, between an overlapped
-    setup (``sc``, a schedule with an interval) and the walker: a :class:`Queue` whose
-    credit (``space``) the setup's start waits for, so it never stalls. The slot is counted
-    at the start and travels with the triangle (``sq_slot`` and its late copies); each value
-    is written as soon as it is ready, into one of a few memories that each take the values
-    ready within an interval of each other, so no value is kept in a copy for this.
-    ``current``: names of values read at the slot last taken (the walker's constants, read in
-    place while it walks that triangle). Returns ``(values, queue, offset)``, ``offset`` the
-    one at which the last memory is written."""
-    slots = Signal(4, name="sq_slots")                   # 4-bit pointers wrap at 16
-    m.d.sync += slots.eq(slots + sc.start)
-    slot = sc.input("sq_slot", slots)
-    keep = {k: x for k, x in values.items() if not isinstance(x, Const)}
-    groups = []
-    for k in sorted(keep, key=lambda k: (k in current, sc.when(keep[k]))):
-        at = sc.when(keep[k])
-        if not groups or k in current and not groups[-1][2] or at >= groups[-1][0] + sc.ii:
-            groups.append([at, {}, k in current])
-        groups[-1][1][k] = keep[k]
-    offset, memories, writes = 0, {}, []
-    for g, (_, vals, now) in enumerate(groups):
-        at = max(sc.when(x) for x in vals.values())
-        offset = max(offset, at)
-        data = sc.late_at(Cat(*vals.values()), at)
-        sc.read(at, data)
-        memories[f"g{g}"] = ({k: Value.cast(x).shape() for k, x in vals.items()}, True, now)
-        writes.append((f"g{g}", data, sc.at(at), sc.late(slot, at)))
-    m.submodules.setup_queue = q = Queue(memories, depth, name="sq")
-    m.d.comb += [q.start.eq(sc.start), q.written.eq(sc.at(offset))]
-    for name, data, en, addr in writes:
-        port = getattr(q, name)
-        m.d.comb += [port.en.eq(en), port.addr.eq(addr), port.data.eq(data)]
-    out = {k: x for k, x in values.items() if isinstance(x, Const)}
-    out.update({k: q.o.payload[k] for k, _ in q.o.payload.shape()})
-    if current:
-        out.update({k: q.current[k] for k, _ in q.current.shape()})
-    return out, q, offset

@@ -47,13 +47,6 @@ def walker_constants(channels, flat=(), in_memory=False):
     return ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels) for k in keys]
 
 
-def walker_constants(channels, flat=(), in_memory=False):
-    """The triangle's values the walker holds for its rows, unchanged while it walks
-    (``in_memory``: a channel's but 2A are in ``channel_engine``'s memory)."""
-    keys = ("a2",) if in_memory else ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")
-    return ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels) for k in keys]
-
-
 def walker_inputs(src, channels, flat=(), in_memory=False, current=False):
     """What the walker reads of the setup's values ``src``: its control, the edges' DDAs (an
     edge's ``n`` the setup's ``n0`` at the width of its ``n``), the tracks and (unless the
