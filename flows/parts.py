@@ -1,4 +1,5 @@
-"""The raster's parts proven alone (issue 49 §3): the walker, the row queue and the stepper.
+"""The raster's parts proven alone (issue 49 §3): the setup, the walker, the queues and the
+stepper.
 
 **The stepper** (``hdl/span_unit/stepper.py``): rows in, one fragment per clock out, both
 streams.
@@ -55,6 +56,12 @@ edge-function model). Against the triangle walked, the rows visited and the row 
 - ``on_screen``: a row goes out only with a pixel on the screen;
 - ``held``, ``no_extra``, ``order`` (each row out is the last row visited with a pixel, of
   the triangle walked; ``order_kept``: none is overtaken, so none is lost), ``drain``.
+**The setup** (``hdl/span_unit/setup_engine.py``), one triangle at a time: free triangles
+in, a free ready out, every product a free value; ``held``, ``no_extra``, ``order`` and
+``order_in`` (one at a time: a triangle is taken only once the last is out), ``drain`` (its
+schedule's length), ``valid_next``; the invariants tie the schedule's phase bits and its
+copies of its flags to the counts.
+
 ``python -m flows.parts [--only row_queue]``; ``make formal`` runs it too.
 """
 import argparse
@@ -77,6 +84,10 @@ SLOTS = 4                # the reference's rows owing fragments: the row in the 
 RASTER = {"screen_bits": 4, "channels": 1}
 TAG = 5                  # the queues' tags: counts modulo 32, twice their 16 words
 SETUP_II = 48            # the setup queue's raster: a triangle every 48 clocks
+# parts on a schedule of products (the setup): the products are free values, since no
+# property reads one; a mutant shows once a triangle has been through (end + 6 clocks),
+# a cover of two triangles out after two
+SCHEDULED = {"setup"}
 
 MUTANTS = {   # name: (what it breaks, the property that must catch it)
     "dropped": ("a fragment offered is taken and lost on its way out", "order"),
@@ -572,6 +583,106 @@ def walker_wires(part):
                for x in ("have", "full", "load", "accept")])
 
 
+def setup():
+    """The setup as the raster builds it at ``RASTER``'s size, one triangle at a time."""
+    return _raster().submodules.setup
+
+
+def setup_harness(part, module, mutant=None, only=None):
+    """The Verilog of ``formal_top``: the setup as ``module``, free triangles in (the setup
+    captures a triangle as it starts, so they need not be held), a free ready out; against
+    the counts of triangles in and out: ``held``, ``no_extra``, ``order`` (each triangle out
+    has the index of the next one owed: ``tri``, the setup's own count of triangles in, so
+    none is made, lost, repeated or reordered), ``drain`` (a triangle in is out within
+    ``end + 1`` clocks of ready held high: its schedule, then its output register) and
+    ``valid_next`` (the valid is the register of the early one). Invariants: at most one
+    job's phase bit is set, and the job runs exactly while one is; the copies of the
+    setup's state agree; a job in flight is the triangle owed, and has waited no longer than
+    its phase."""
+    outs = _members(part.o, part.fields)
+    F = sum(w for _, w, _ in outs.values())
+    P = part.i.payload.shape().size
+    end, C = part.end, COUNT
+    sl = lambda k: f"o_payload[{outs[k][0] + outs[k][1] - 1}:{outs[k][0]}]"
+    n_idle, n_run = _state_copies(part)
+    L = ["`default_nettype none", "module formal_top(input wire clk);",
+         "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;", "  wire rst = init;",
+         "  (* anyseq *) reg i_valid, o_ready, stop;", f"  (* anyseq *) reg [{P - 1}:0] free;",
+         "  wire i_ready, busy, vn, d_valid, d_ready, o_valid;",
+         f"  wire [{F - 1}:0] d_payload, o_payload;",
+         f"  {module} dut (.clk(clk), .rst(rst), .i__valid(i_valid), .i__ready(i_ready), "
+         ".i__payload(free), "
+         + "".join(f".o__{k}(d_payload[{outs[k][0] + outs[k][1] - 1}:{outs[k][0]}]), "
+                   for k in outs)
+         + ".o__valid(d_valid), .o__ready(d_ready), .o_valid_next(vn), .busy(busy));"]
+    L += mutated(mutant, F, outs["tri"][0])
+    L += [f"  reg [{C - 1}:0] n_in = 0, n_out = 0;",
+          "  wire in_t = ~rst & i_valid & i_ready, out_t = ~rst & o_valid & o_ready;",
+          "  always @(posedge clk) if (!rst) begin n_in <= n_in + in_t; "
+          "n_out <= n_out + out_t; end",
+          f"  reg [{F - 1}:0] past_out;", "  reg past_ostall = 1'b0, past_vn = 1'b0;",
+          "  always @(posedge clk) begin past_ostall <= ~rst & o_valid & ~o_ready; "
+          "past_out <= o_payload; past_vn <= ~rst & vn; end",
+          "  wire owed = n_in != n_out;",
+          "  reg [7:0] wait_n = 0;",
+          "  always @(posedge clk) wait_n <= (~rst & owed & o_ready & ~out_t) ? wait_n + 1 : 0;",
+          f"  wire [{outs['tri'][1] - 1}:0] o_tri = {sl('tri')};",
+          "  always @* if (!rst) begin",
+          "    if (past_ostall) begin held: assert(o_valid);",
+          "      held_payload: assert(o_payload == past_out); end",
+          "    if (out_t) no_extra: assert(owed);",
+          f"    if (out_t) order: assert(o_tri[{C - 1}:0] == n_out);",    # counts modulo 2^C
+          # one at a time: a triangle is taken only once the last is out, so the next out
+          # is the next owed (a triangle dropped on its way out shows here)
+          "    if (in_t) order_in: assert(!owed);",
+          f"    drain: assert(wait_n <= {end + 1});",
+          "    valid_next: assert(d_valid == past_vn);",
+          "    c_two: cover(out_t && n_out == 1);",          # a second triangle through
+          "    c_stall: cover(past_ostall && o_ready);",
+          "  end"]
+    # invariants: the phase bits (one job at most, running while one is set), the copies,
+    # the job in flight owed and its wait bounded by its phase
+    ph = [f"s_ph{k}" for k in range(1, end + 1)]
+    L += [f"  (* keep *) wire {', '.join(ph)};",
+          "  (* keep *) wire s_done;",
+          f"  (* keep *) wire [{outs['tri'][1] - 1}:0] s_count;",
+          *[f"  (* keep *) wire s_idle{k};" for k in range(n_idle)],
+          *[f"  (* keep *) wire s_running{k};" for k in range(n_run)],
+          f"  wire [{end - 1}:0] phases = {{{', '.join(reversed(ph))}}};",
+          "  wire job = |phases;",
+          "  always @* if (!rst) begin",
+          "    inv_one: assert((phases & (phases - 1)) == 0);",
+          "    inv_run: assert(s_running0 == job && !(job && s_done));",
+          *[f"    inv_run{k}: assert(s_running{k} == s_running0);" for k in range(1, n_run)],
+          *[f"    inv_idle{k}: assert(s_idle{k} == (!job && !s_done));" for k in range(n_idle)],
+          "    inv_done: assert(d_valid == s_done && busy == (job || s_done));",
+          f"    inv_count: assert(s_count[{C - 1}:0] == n_in && "
+          f"n_in - n_out == {{{C - 1}'d0, job || s_done}});",
+          f"    if (job || s_done) inv_tri: assert(d_payload[{outs['tri'][0] + C - 1}:"
+          f"{outs['tri'][0]}] == n_out);",
+          "    if (!job && !s_done) inv_wait_idle: assert(wait_n == 0);",
+          f"    if (s_done) inv_wait_done: assert(wait_n <= {end});",
+          *[f"    if (s_ph{k}) inv_wait{k}: assert(wait_n <= {k - 1});"
+            for k in range(1, end + 1)],
+          "  end", "endmodule"]
+    return keep_only("\n".join(L) + "\n", only)
+
+
+def _state_copies(part):
+    """How many copies of the setup's idle and running flags it has (its Verilog)."""
+    text = export(part, "f_setup")
+    return (len(set(re.findall(r"\bsu_idle(\d+)\b", text))),
+            len(set(re.findall(r"\bsu_running(\d+)\b", text))))
+
+
+def setup_wires(part):
+    n_idle, n_run = _state_copies(part)
+    return ([(f"s_ph{k}", f"su_ph{k}") for k in range(1, part.end + 1)]
+            + [("s_done", "done"), ("s_count", "su_tri")]
+            + [(f"s_idle{k}", f"su_idle{k}") for k in range(n_idle)]
+            + [(f"s_running{k}", f"su_running{k}") for k in range(n_run)])
+
+
 # the parts: name -> (the part, its harness, the wires its invariants read, its mutants)
 STREAM = ("dropped", "extra", "unstable", "stuck")
 PARTS = {
@@ -581,18 +692,20 @@ PARTS = {
     "row_queue_serial": (lambda: row_queue(serial=True), queue_harness, queue_wires,
                          (*STREAM, "overrun")),
     "setup_queue": (setup_queue, queue_harness, queue_wires, (*STREAM, "overrun")),
+    "setup": (setup, setup_harness, setup_wires, STREAM),
 }
 
 
-def sby_text(module, mode, depth, wires=()):
+def sby_text(module, mode, depth, wires=(), cut=False):
     """The SymbiYosys job: the design flattened, for the invariants its memories mapped to
     registers and their wires connected (a mutant's BMC asserts none of them, and the signals they
-    read may be optimised away)."""
+    read may be optimised away); ``cut``: each product a free value."""
     return "\n".join([
         "[options]", f"mode {mode}", f"depth {depth}", "multiclock off", "",
         "[engines]", "smtbmc yices", "",
         "[script]", "read_verilog -formal harness.v", f"read_verilog {module}.v",
         "hierarchy -top formal_top", "proc", "flatten", *(("memory_map",) if wires else ()),
+        *(("cutpoint t:$mul",) if cut else ()),
         "opt_clean",
         "cd formal_top", *[f"connect -set {w} dut.{n}" for w, n in wires], "cd ..",
         "prep -top formal_top", "",
@@ -609,15 +722,17 @@ def run(name, check, mutant=None, timeout=None, part=None):
     if mutant:                  # a BMC of the one property it breaks (an overrun: once the
         #                         queue is full, ``depth`` rows after the first start)
         mode, only = "bmc", (MUTANTS[mutant][1],)
-        depth = part.depth + 4 if mutant == "overrun" else MUTANT_DEPTH
-    elif mode == "cover":
-        depth = COVER_DEPTH
+        depth = (part.depth + 4 if mutant == "overrun" else
+                 part.end + 6 if name in SCHEDULED else MUTANT_DEPTH)
+    elif mode == "cover":                  # a scheduled part: two triangles through
+        depth = 2 * (part.end + 3) if name in SCHEDULED else COVER_DEPTH
     tag = name + (f"_{mutant}" if mutant else "") + f"_{check}"
     work = OUT / tag
     module = f"f_{name}"
     status, failed, seconds = run_sby(work, {
         f"{module}.v": export(part, module), "harness.v": harness(part, module, mutant, only),
-        "job.sby": sby_text(module, mode, depth, () if mutant else wires(part))},
+        "job.sby": sby_text(module, mode, depth, () if mutant else wires(part),
+                            cut=name in SCHEDULED)},
         mode, timeout)
     out = {"target": name, "check": mode if mutant else check, "mutant": mutant,
            "status": status,
