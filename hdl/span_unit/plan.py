@@ -12,10 +12,11 @@ same Verilog.
 """
 import functools
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from ..setup_unit.formats import MODES, VALUE, parse_groups, parse_modes, parse_precision
 
-__all__ = ["Channel", "RasterPlan", "KNOBS", "RECIPS", "RANGES"]
+__all__ = ["Channel", "RasterPlan", "Timing", "KNOBS", "RECIPS", "RANGES"]
 
 # the architecture's knobs: name -> (default, range, what it is); README "Raster knobs"
 KNOBS = {
@@ -40,6 +41,17 @@ class Channel:
     mode: str = MODES[0]
     group: int = 0
     precision: int = VALUE.frac_bits
+
+
+class Timing(NamedTuple):
+    """The raster's clocks, from its two schedules: the setup's clocks a triangle (its
+    length, or ``setup_ii``), the row engine's clocks a row and its length, and the offset
+    of the setup's last result (its last register, or its last write into the setup
+    queue)."""
+    setup_clocks: int
+    row_ii: int
+    row_clocks: int
+    setup_end: int
 
 
 @dataclass(frozen=True)
@@ -103,6 +115,20 @@ class RasterPlan:
         if self.groups == 1:
             del out["groups"]
         return out
+
+    @property
+    def timing(self):
+        """The plan's :class:`Timing`, from the setup's and the row engine's schedules built
+        on their own (not the raster's elaboration)."""
+        return _timing(self)
+
+    @property
+    def latency(self):
+        """From a triangle in to its first fragment out, when nothing waits: the setup (to
+        its results' last register, or last queue write), the walker's load and its row
+        buffer, the row engine, the row queue, the stepper's load, the output register."""
+        t = self.timing
+        return t.setup_end + 1 + 2 + t.row_clocks + 3
 
     @property
     def setup(self):
@@ -196,3 +222,29 @@ def _products(*params):
     setup.program(sc, {**v, "tri": Signal(32)})
     Fragment.get(m, None)                        # (its ROMs are used, for Amaranth's checks)
     return sum(len(u) for u in sc.mults), sc.fits
+
+
+@functools.lru_cache(maxsize=None)
+def _timing(plan):
+    from amaranth.hdl import Fragment, Module, Signal
+
+    from ..fixed import layout
+    from ..setup_unit.formats import flat_fields, triangle_fields
+    from .setup_engine import SetupEngine
+    from .span import plan_row_engine
+    from .walker import Walker
+    flats = flat_fields(plan.flat)
+    flat = [f.name for f in flats]
+    fields = triangle_fields(plan.screen_bits, plan.sub_bits, len(plan.channels),
+                             plan.groups) + flats
+    m = Module()
+    m.submodules.setup = su = SetupEngine(plan, layout(fields), flat)
+    m.submodules.walker = wk = Walker(plan.setup.w, len(plan.channels), su.fields,
+                                      su.current_fields, flat, bool(su.const_fields))
+    consts = (su.consts_index, {k: su.consts[k] for k in su.const_fields},
+              len(su.consts_index)) if su.const_fields else None
+    rows = {k: getattr(wk.o, k) for k in wk.outputs}
+    _, _, _, re = plan_row_engine(m, plan, plan.setup.w, rows, wk.o, Signal(), None, flat,
+                                  consts)
+    Fragment.get(m, None)                        # (every part used, for Amaranth's checks)
+    return Timing(su.clocks, re["ii"], re["length"], su.end)

@@ -16,9 +16,7 @@ work on the current one.
 Status outputs: ``busy`` (work in flight) and ``culled`` (degenerate triangles, Omega = 0,
 dropped).
 """
-import functools
-
-from amaranth.hdl import Fragment, Module, Signal, Value
+from amaranth.hdl import Module, Signal, Value
 from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
@@ -28,7 +26,7 @@ from ..unit import Unit
 from .plan import KNOBS, RANGES as PLAN_RANGES, RECIPS, RasterPlan
 from .queue import Queue
 from .setup_engine import SetupEngine
-from .span import row_engine, row_engine_serial
+from .span import plan_row_engine
 from .walker import Walker
 from .stepper import Stepper
 
@@ -75,18 +73,12 @@ class Raster(Unit):
 
     @property
     def timing(self):
-        """``(setup_clocks, row_ii, row_clocks)``: the setup's clocks per triangle (its
-        length, or ``setup_ii``), the row engine's clocks per row and its latency (from the
-        schedules themselves)."""
-        return _timing(tuple(sorted(self.params.items())))[:3]
+        """``(setup_clocks, row_ii, row_clocks)``: the plan's (``RasterPlan.timing``)."""
+        return self.plan.timing[:3]
 
     @property
     def latency(self):
-        """From a triangle in to its first fragment out, when nothing waits: the setup (to
-        its results' last register, or last queue write), the walker's load and its row
-        buffer, the row engine, the row queue, the stepper's load, the output register."""
-        _, _, row_clocks, setup_end = _timing(tuple(sorted(self.params.items())))
-        return setup_end + 1 + 2 + row_clocks + 3
+        return self.plan.latency
 
     def elaborate(self, platform):
         m = Module()
@@ -102,13 +94,10 @@ class Raster(Unit):
             m.d.comb += wk.current.eq(su.current)
         consts = (su.consts_index, {k: su.consts[k] for k in su.const_fields},
                   len(su.consts_index)) if su.const_fields else None
-        # the row engine: every channel a job, or one channel a job (``row_serial``)
         space = Signal(name="rq_space", init=1)
         rows = {k: getattr(wk.o, k) for k in wk.outputs}
-        engine = row_engine_serial if self.plan.row_serial else row_engine
-        writes, started, written, re = engine(
-            m, w, self.setup.modes, rows, wk.o, space, platform, flat,
-            self.plan.row_serial or self.plan.row_mults or ch + 1, consts, self.precision)
+        writes, started, written, re = plan_row_engine(m, self.plan, w, rows, wk.o, space,
+                                                       platform, flat, consts)
         m.submodules.row_queue = rq = Queue({
             name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None, False)
             for name, vals, _, slot in writes})
@@ -125,12 +114,4 @@ class Raster(Unit):
         busy = (st.busy | self.o.valid | wk.busy | wk.o.valid | written | rq.o.valid | su.busy
                 | re["busy"])
         m.d.comb += [self.busy.eq(busy), self.culled.eq(wk.culled)]
-        self._timing = (su.clocks, re["ii"], re["length"], su.end)
         return m
-
-
-@functools.lru_cache(maxsize=None)
-def _timing(items):
-    unit = Raster(**dict(items))
-    Fragment.get(unit, None)                     # elaborated whole: nothing left unused
-    return unit._timing

@@ -15,7 +15,18 @@ from ..sched import OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
 
-__all__ = ["row_engine", "row_engine_serial", "row_products", "split_fields", "turns"]
+__all__ = ["plan_row_engine", "row_engine", "row_engine_serial", "row_products",
+           "split_fields", "turns"]
+
+
+def plan_row_engine(m, plan, w, rows, row_link, space, platform=None, flat=(), consts=None):
+    """The plan's row engine: every channel a job (:func:`row_engine`, on ``row_mults`` or
+    one multiplier per channel and one more), or one channel a job
+    (:func:`row_engine_serial`, ``row_serial``)."""
+    engine = row_engine_serial if plan.row_serial else row_engine
+    return engine(m, w, plan.modes, rows, row_link, space, platform, flat,
+                  plan.row_serial or plan.row_mults or len(plan.channels) + 1, consts,
+                  plan.precision)
 
 
 def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None,
