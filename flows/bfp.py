@@ -64,10 +64,13 @@ def _exp(*groups):
     return np.floor(np.log2(np.maximum(top, 2.0 ** -60))) + 1
 
 
-def errors(inputs, m, screen_bits, sub_bits, modes):
+def errors(inputs, m, screen_bits, sub_bits, modes, recip=False):
     """Per fragment, |Phi emulated - Phi float| in LSBs (2^-14), the worst quadratic channel;
     per triangle the widest chord W and the derived bound (:func:`bound`, LSBs, the worst
-    quadratic channel); and each fragment's triangle."""
+    quadratic channel); and each fragment's triangle. ``recip``: u and v made as a narrow
+    row engine would, from m-bit mantissas of the numerator (at Omega's exponent) and of the
+    reciprocal of Omega's mantissa, the product rounded again: each of the three roundings
+    at most r (below), so the bound takes 3 r."""
     channels = len(modes)
     x, y = R._vertices(inputs)
     tri, px, py = R.coverage(x, y, sub_bits, screen_bits)
@@ -87,7 +90,16 @@ def errors(inputs, m, screen_bits, sub_bits, modes):
         u, v = q.uv_of(g["x1"], g["y1"], g["x2"], g["y2"], X0, Y0)
         ue, ve = q.uv_of(g["x1"], g["y1"], g["x2"], g["y2"], px + 0.5 - st["x0"][tri],
                          py + 0.5 - st["y0"][tri])
-    uq, vq = (np.rint(w * 2.0 ** (m - 2)) * 2.0 ** -(m - 2) for w in (u, v))
+    rnd = lambda x, f: np.rint(x * 2.0 ** f) * 2.0 ** -f
+    if recip:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sh = np.floor(np.log2(np.abs(omega)))                 # |Omega| = M 2^sh
+            rm = rnd(2.0 ** sh / np.abs(omega), m - 1)[tri]       # 1/M in (1/2, 1]
+            scale = np.abs(omega)[tri] * 2.0 ** -sh[tri]         # M, in [1, 2)
+            # the numerator at Omega's exponent, nu sign(Omega) / 2^sh = u M, in [0, 2)
+            uq, vq = (rnd(rnd(w * scale, m - 2) * rm, m - 2) for w in (u, v))
+    else:
+        uq, vq = (rnd(w, m - 2) for w in (u, v))
     out, bounds = [], [np.zeros(len(omega))]
     for ch, mode in enumerate(modes):
         if mode == "linear":
@@ -99,7 +111,7 @@ def errors(inputs, m, screen_bits, sub_bits, modes):
             A = a * ux * ux + b * vx * vx + c * ux * vx
             Pu, Pv, P0 = 2 * a * ux + c * vx, 2 * b * vx + c * ux, A + d * ux + e * vx
         e0, e1, e2 = _exp(a, b, c, d, e), _exp(P0, Pu, Pv), _exp(2 * A)
-        bounds.append(bound(m, e0, e1, e2, width))
+        bounds.append(bound(m, e0, e1, e2, width, 3 if recip else 1))
         qa, qb, qc, qd, qe = (_quant(z, e0, m)[tri] for z in (a, b, c, d, e))
         t1 = qd + qa * uq + qc * vq
         t2 = qe + qb * vq
@@ -114,7 +126,7 @@ def errors(inputs, m, screen_bits, sub_bits, modes):
     return tri, err, width, np.max(bounds, 0)
 
 
-def bound(m, e0, e1, e2, width):
+def bound(m, e0, e1, e2, width, rs=1):
     """The error at a triangle's fragments, derived from its exponents, in LSBs (2^-14):
     what a setup could test to pick the narrow path. e(x) = 2^(x - m) is half a mantissa's
     step at exponent x, r = 2^-(m-1) the rounding of u and v, and u, v >= 0, u + v <= 1 at a
@@ -128,13 +140,15 @@ def bound(m, e0, e1, e2, width):
     - The first difference P0 + Pu u + Pv v: e(e1) + 2 (e(e1) + 2^e1 r) = 7 e(e1); 2A e(e2).
       After i steps: i 7 e(e1) + i (i - 1) / 2 e(e2), i <= floor(W): a row has at most
       floor(W) + 1 pixel centres, W the widest chord.
-    The products of two roundings are below a factor 1 + 2^-(m-3) of the sum."""
+    The products of two roundings are below a factor 1 + 2^-(m-3) of the sum. ``rs``: u and
+    v off by rs r, not r (``errors``' ``recip``)."""
     eps = lambda x: 2.0 ** (x - m)
     with np.errstate(invalid="ignore"):
         n = np.floor(np.nan_to_num(width, nan=0.0, posinf=0.0))
-    with np.errstate(invalid="ignore"):
-        total = 19 * eps(e0) + 7 * n * eps(e1) + n * (n - 1) / 2 * eps(e2)
-    return total * (1 + 2.0 ** -(m - 3)) / VALUE.lsb
+    with np.errstate(invalid="ignore"):            # the terms in r are 12 e(e0), 4 e(e1)
+        total = ((7 + 12 * rs) * eps(e0) + (3 + 4 * rs) * n * eps(e1)
+                 + n * (n - 1) / 2 * eps(e2))
+    return total * (1 + rs * 2.0 ** -(m - 3)) / VALUE.lsb
 
 
 def additions(inputs, screen_bits, sub_bits, channels):
@@ -159,20 +173,21 @@ def additions(inputs, screen_bits, sub_bits, channels):
     return per[drawn], width[drawn], len(tri), rows, len(st["x1"])
 
 
-def blocks(inputs, m, screen_bits, sub_bits, modes, rate):
+def blocks(inputs, m, screen_bits, sub_bits, modes, rate, recip=False):
     """The 18 x 18 blocks a raster needs to draw ``inputs`` at ``rate`` fragments a clock,
     counting block-clocks per triangle in: today (the setup's products that fit 18 x 18 one
     block-clock, the rest and every row product ``WIDE``), and with a narrow path (every
     setup product one, assumed: its exponents are not measured; a row's products one on a
     triangle whose derived bound at m bits is within half an LSB, ``WIDE`` passes on the
-    others). Returns (narrow share of rows, blocks today, blocks with the path)."""
+    others; ``recip``: u and v from the reciprocal, as :func:`errors`). Returns (narrow
+    share of rows, blocks today, blocks with the path)."""
     from hdl.span_unit.plan import RasterPlan
     from hdl.span_unit.span import row_products
     plan = RasterPlan.from_params(screen_bits=screen_bits, sub_bits=sub_bits,
                                   channels=len(modes), modes=",".join(modes))
     setup, fits = plan.setup_products
     per_row = row_products(modes)
-    tri, _, _, bnd = errors(inputs, m, screen_bits, sub_bits, modes)
+    tri, _, _, bnd = errors(inputs, m, screen_bits, sub_bits, modes, recip)
     x, y = R._vertices(inputs)
     _, _, py = R.coverage(x, y, sub_bits, screen_bits)
     rows = np.unique(tri.astype(np.int64) * (2 << screen_bits) + py) // (2 << screen_bits)
@@ -220,12 +235,13 @@ def main():
         slivers = f"{(width[drawn] < 1).mean() * 100:.1f} %"
         print(f"| {label} | {len(drawn):,} | {slivers} | " + " | ".join(cells)
               + f" | {ratio:.3f} |")
+    narrow = ((18, False), (20, False), (20, True), (22, True))
     print("\n| mesh | target (fragments / clock) | MULT18X18D today | "
-          + " | ".join(f"{m} bits: rows on the narrow path, MULT18X18D" for m in (18, 20))
-          + " |")
-    print("| --- | --- | --- | --- | --- |")
+          + " | ".join(f"{m} bits{', u and v from 1/Omega' if r else ''}: rows on the narrow "
+                       f"path, MULT18X18D" for m, r in narrow) + " |")
+    print("| --- | --- | --- | " + " | ".join("---" for _ in narrow) + " |")
     for label, inputs, sb, sub, modes in cases[:len(MESHES)]:
-        got = [blocks(inputs, m, sb, sub, modes, TARGETS[label]) for m in (18, 20)]
+        got = [blocks(inputs, m, sb, sub, modes, TARGETS[label], r) for m, r in narrow]
         print(f"| {label} | {TARGETS[label]} | {got[0][1]} | "
               + " | ".join(f"{s * 100:.1f} %, {b}" for s, _, b in got) + " |")
     print("\n| triangles | in | fragments / triangle in | rows / triangle in | K median | "

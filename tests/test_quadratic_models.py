@@ -207,13 +207,14 @@ def test_the_degree_measure_sees_flat_and_curved_meshes():
     assert (torus > 2.0 ** -15).all()
 
 
-@pytest.mark.parametrize("m", [14, 18, 22])
-def test_the_block_floating_point_bound_holds(m):
+@pytest.mark.parametrize("m, recip", [(14, False), (18, False), (22, False), (20, True)])
+def test_the_block_floating_point_bound_holds(m, recip):
     """flows.bfp.bound (issue 49): the row start's error derived per triangle from its
     exponents and its widest chord must cover the emulated error (every product's operands
     rounded to m-bit mantissas, against the float model) at every fragment, slivers and
-    screen-sized triangles included, and in the exact mode's larger terms. Each term of the
-    derivation is a worst case that the others seldom meet at once: the bound is 4-6 times
+    screen-sized triangles included, and in the exact mode's larger terms; ``recip``: u and
+    v made from mantissas of the numerator and the reciprocal (three roundings). Each term of the
+    derivation is a worst case that the others seldom meet at once: the bound is 4-11 times
     the worst error (flows.bfp's table), and a bound 20 times over would be vacuous."""
     from flows.bfp import errors
     from golden import random_triangles, TYPICAL_SIZE
@@ -221,7 +222,7 @@ def test_the_block_floating_point_bound_holds(m):
     for size in (TYPICAL_SIZE, None):                 # typical and screen-sized, at 256 x 256
         inputs = random_triangles(rng, 150, screen_bits=8, sub_bits=4, channels=2,
                                   **({"size": size} if size else {}))
-        tri, err, width, bnd = errors(inputs, m, 8, 4, ("xshading", "exact"))
+        tri, err, width, bnd = errors(inputs, m, 8, 4, ("xshading", "exact"), recip)
         assert len(tri) > 1000 and (width[np.unique(tri)] < 1).any()      # slivers drawn
         assert (err <= bnd[tri]).all()
         assert (err / bnd[tri]).max() > 0.05                # the bound is not vacuous
