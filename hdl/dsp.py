@@ -15,7 +15,7 @@ from contextvars import ContextVar
 
 from amaranth.hdl import ClockSignal, Const, Instance, Mux, Signal, Value, signed
 
-__all__ = ["Target", "ecp5", "mult18", "soft_mult", "soft_halves", "soft_as_mul",
+__all__ = ["Target", "ecp5", "mult18", "mult20", "soft_mult", "soft_halves", "soft_as_mul",
            "Product"]
 
 
@@ -62,6 +62,36 @@ def mult18(m, name, a, b, en, platform):
                   for x, s in ((a, "a"), (b, "b")))
         with m.If(en):
             m.d.sync += [ra.eq(a), rb.eq(b), p.eq(ra * rb)]
+    return p
+
+
+def mult20(m, name, a, b, en, platform):
+    """``a * b`` of two signed operands of at most 20 bits on one MULT18X18D, four clocks
+    later (issue 49's narrow products, docs/quadratic.md): with a = 4 aH + aL and b = 4 bH +
+    bL (aH, bH the top 18 bits, signed; aL, bL the low two, unsigned), a b = 16 aH bH +
+    4 (aH bL + aL bH) + aL bL. aH bH is the block's (:func:`mult18`: operands, then the
+    product, registered); the rest is summed in logic beside it, no more than two adders a
+    clock: aH bL, aL bH and aL bL (a 2-bit operand's conditional additions, :func:`soft_mult`),
+    then their sum, then the sum with the block's product. Everything holds while ``en`` is
+    low. Returns the 40-bit signed product register. ``flows.products`` measures it."""
+    a, b = Value.cast(a), Value.cast(b)
+    if len(a) > 20 or len(b) > 20 or not (a.shape().signed and b.shape().signed):
+        raise ValueError(f"{name}: operands of at most 20 bits, signed; here {a.shape()} and "
+                         f"{b.shape()}")
+    wa, wb = (Signal(signed(20), name=f"{name}_w{s}") for s in "ab")    # sign-extended
+    m.d.comb += [wa.eq(a), wb.eq(b)]
+    hi = mult18(m, f"{name}_hi", wa[2:].as_signed(), wb[2:].as_signed(), en, platform)
+    reg = lambda shape, k: Signal(shape, name=f"{name}_{k}", reset_less=True)
+    ra, rb = reg(signed(20), "sa"), reg(signed(20), "sb")
+    x, y, z = reg(signed(20), "x"), reg(signed(20), "y"), reg(4, "z")
+    side, hi2, p = reg(signed(24), "side"), reg(signed(36), "hi2"), reg(signed(40), "p")
+    with m.If(en):
+        m.d.sync += [ra.eq(wa), rb.eq(wb),
+                     x.eq(soft_mult(rb[:2], ra[2:].as_signed())),
+                     y.eq(soft_mult(ra[:2], rb[2:].as_signed())),
+                     z.eq(soft_mult(ra[:2], rb[:2])),
+                     side.eq(((x + y) << 2) + z), hi2.eq(hi),
+                     p.eq((hi2 << 4) + side)]
     return p
 
 

@@ -178,3 +178,41 @@ endmodule
             ra, rb = int(a[t]), int(b[t])
         if prod is not None:                         # two enabled edges since the start
             assert [v if v is None else sx(v, 36) for v in got[t]] == prod, f"cycle {t}"
+
+
+def test_a_20_bit_product_on_one_block_is_exact():
+    """hdl.dsp.mult20 (issue 49's narrow products: one MULT18X18D and the two low bits'
+    partial products in logic) against Python's integer product, four enabled clocks after
+    its operands, on the corners of the 20-bit signed range and 3,000 random pairs, with the
+    enable toggling. Its block is mult18's, whose ECP5 form is checked above."""
+    from hdl.dsp import mult20
+    rng = np.random.default_rng(20)
+    lo, hi = -(1 << 19), (1 << 19) - 1
+    corner = [lo, hi, -1, 0, 1, 2, 3, -4, lo + 3, hi - 3]
+    pairs = [(x, y) for x in corner for y in corner]
+    pairs += [tuple(map(int, rng.integers(lo, hi + 1, 2))) for _ in range(3000)]
+    en_seq = rng.random(len(pairs)) < 0.7
+    m = Module()
+    a, b, en = Signal(signed(20)), Signal(signed(20)), Signal()
+    p = mult20(m, "m", a, b, en, None)
+    got, want = [], []
+
+    async def bench(ctx):
+        held = []                                  # the operands of the enabled clocks
+        for (x, y), e in zip(pairs, en_seq):
+            ctx.set(a, x)
+            ctx.set(b, y)
+            ctx.set(en, int(e))
+            await ctx.tick()
+            if e:
+                held.append(x * y)
+                if len(held) >= 4:                # the fourth enabled edge since those operands
+                    got.append(ctx.get(p))
+                    want.append(held[-4])
+    sim = Simulator(m)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    assert len(got) > 2000 and got == want
+    with pytest.raises(ValueError, match="at most 20 bits"):
+        mult20(m, "x", Signal(signed(21)), Signal(signed(4)), Signal(), None)
