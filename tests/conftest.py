@@ -29,7 +29,8 @@ FIRST = ("test_angular_scene_rtl_within_bound", "test_a_small_scene_through_the_
          "test_xz_scene_rtl_within_bound", "test_simulators_agree", "test_generated_scenes",
          "test_phong_fenney_two_lights", "test_an_effect_with_its_own",
          "test_a_new_effect_is_one_file", "test_onchip_texture_is_the_external_one",
-         "test_hard_cases", "test_edge_constant_groups", "test_a_raster_part_proven")
+         "test_hard_cases", "test_edge_constant_groups", "test_a_raster_part_proven",
+         "test_the_setup_proven")
 
 
 def pytest_collection_modifyitems(items):

@@ -121,3 +121,18 @@ def test_the_row_queue_overrun_is_caught():
     from flows import parts
     r = parts.run("row_queue", "prove", "overrun")
     assert parts.caught(r), r
+
+
+@pytest.mark.skipif(shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None,
+                    reason="yowasp-sby is not installed")
+def test_the_setup_proven_and_a_stuck_one_caught():
+    """The setup alone, one triangle at a time, its products free (flows/parts.py): held,
+    no_extra, order, order_in, drain within its schedule and valid_next by k-induction; a
+    setup whose output stops is caught by drain once a triangle has had time to pass (make
+    formal adds its covers and the other three mutants, 11-33 s each: make test's budget)."""
+    from flows import parts
+    part = parts.PARTS["setup"][0]()
+    r = parts.run("setup", "prove", part=part)
+    assert r["status"] == "pass" and not r["failed"], r
+    r = parts.run("setup", "prove", "stuck", part=part)
+    assert parts.caught(r), r
