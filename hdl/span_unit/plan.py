@@ -226,12 +226,12 @@ def _products(*params):
 
 @functools.lru_cache(maxsize=None)
 def _timing(plan):
-    from amaranth.hdl import Fragment, Module, Signal
+    from amaranth.hdl import Fragment, Module
 
     from ..fixed import layout
     from ..setup_unit.formats import flat_fields, triangle_fields
+    from .row_engine import RowEngine, const_fields, row_fields
     from .setup_engine import SetupEngine
-    from .span import plan_row_engine
     from .walker import Walker
     flats = flat_fields(plan.flat)
     flat = [f.name for f in flats]
@@ -241,10 +241,6 @@ def _timing(plan):
     m.submodules.setup = su = SetupEngine(plan, layout(fields), flat)
     m.submodules.walker = wk = Walker(plan.setup.w, len(plan.channels), su.fields,
                                       su.current_fields, flat, bool(su.const_fields))
-    consts = (su.consts_index, {k: su.consts[k] for k in su.const_fields},
-              len(su.consts_index)) if su.const_fields else None
-    rows = {k: getattr(wk.o, k) for k in wk.outputs}
-    _, _, _, re = plan_row_engine(m, plan, plan.setup.w, rows, wk.o, Signal(), None, flat,
-                                  consts)
+    m.submodules.row_engine = re = RowEngine(plan, row_fields(wk), flat, const_fields(su))
     Fragment.get(m, None)                        # (every part used, for Amaranth's checks)
-    return Timing(su.clocks, re["ii"], re["length"], su.end)
+    return Timing(su.clocks, re.ii, re.length, su.end)

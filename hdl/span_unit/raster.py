@@ -16,7 +16,7 @@ work on the current one.
 Status outputs: ``busy`` (work in flight) and ``culled`` (degenerate triangles, Omega = 0,
 dropped).
 """
-from amaranth.hdl import Module, Signal, Value
+from amaranth.hdl import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
@@ -26,7 +26,7 @@ from ..unit import Unit
 from .plan import KNOBS, RANGES as PLAN_RANGES, RECIPS, RasterPlan
 from .queue import Queue
 from .setup_engine import SetupEngine
-from .span import plan_row_engine
+from .row_engine import RowEngine, const_fields, row_fields
 from .walker import Walker
 from .stepper import Stepper
 
@@ -92,26 +92,21 @@ class Raster(Unit):
         m.d.comb += wk.i_valid_next.eq(su.o_valid_next)
         if su.current_fields:
             m.d.comb += wk.current.eq(su.current)
-        consts = (su.consts_index, {k: su.consts[k] for k in su.const_fields},
-                  len(su.consts_index)) if su.const_fields else None
-        space = Signal(name="rq_space", init=1)
-        rows = {k: getattr(wk.o, k) for k in wk.outputs}
-        writes, started, written, re = plan_row_engine(m, self.plan, w, rows, wk.o, space,
-                                                       platform, flat, consts)
-        m.submodules.row_queue = rq = Queue({
-            name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None, False)
-            for name, vals, _, slot in writes})
-        m.d.comb += [rq.start.eq(started), rq.written.eq(written), space.eq(rq.space)]
-        for name, vals, en, slot in writes:
-            port = getattr(rq, name)
-            m.d.comb += [port.en.eq(en)] + [port.data[k].eq(x) for k, x in vals.items()]
-            if slot is not None:
-                m.d.comb += port.addr.eq(slot)
+        m.submodules.row_engine = re = RowEngine(self.plan, row_fields(wk), flat,
+                                                 const_fields(su))
+        wiring.connect(m, wk.o, re.i)
+        if su.const_fields:
+            m.d.comb += [su.consts_index.eq(re.consts_index), re.consts.eq(su.consts)]
+        m.submodules.row_queue = rq = Queue({name: (fields, slotted, False)
+                                             for name, (fields, slotted) in re.memories.items()})
+        m.d.comb += [rq.start.eq(re.started), rq.written.eq(re.written), re.space.eq(rq.space)]
+        for name in re.memories:
+            wiring.connect(m, getattr(re, name), getattr(rq, name))
         m.submodules.stepper = st = Stepper(w, {k: f.shape for k, f in rq.o.payload.shape()},
                                             self.o.payload.shape(), self.precision, flat)
         wiring.connect(m, rq.o, st.i)
         wiring.connect(m, st.o, wiring.flipped(self.o))
-        busy = (st.busy | self.o.valid | wk.busy | wk.o.valid | written | rq.o.valid | su.busy
-                | re["busy"])
+        busy = (st.busy | self.o.valid | wk.busy | wk.o.valid | re.written | rq.o.valid
+                | su.busy | re.busy)
         m.d.comb += [self.busy.eq(busy), self.culled.eq(wk.culled)]
         return m
