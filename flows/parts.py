@@ -1,5 +1,5 @@
-"""The raster's parts proven alone (issue 49 §3): the setup, the walker, the queues and the
-stepper.
+"""The raster's parts proven alone (issue 49 §3): the setup, the walker, the row engines,
+the queues and the stepper.
 
 **The stepper** (``hdl/span_unit/stepper.py``): rows in, one fragment per clock out, both
 streams.
@@ -62,6 +62,12 @@ in, a free ready out, every product a free value; ``held``, ``no_extra``, ``orde
 schedule's length), ``valid_next``; the invariants tie the schedule's phase bits and its
 copies of its flags to the counts.
 
+**The row engines** (``hdl/span_unit/row_engine.py``), both forms: rows held until taken, a
+free credit; ``handshake`` and ``credit`` (a row starts exactly when taken, only on a
+credit), ``early`` (its carried values written at the start), ``order`` and ``drain`` (its
+last write exactly D clocks after each start); the invariants tie the schedule's phase bits
+to the starts delayed.
+
 ``python -m flows.parts [--only row_queue]``; ``make formal`` runs it too.
 """
 import argparse
@@ -84,10 +90,12 @@ SLOTS = 4                # the reference's rows owing fragments: the row in the 
 RASTER = {"screen_bits": 4, "channels": 1}
 TAG = 5                  # the queues' tags: counts modulo 32, twice their 16 words
 SETUP_II = 48            # the setup queue's raster: a triangle every 48 clocks
-# parts on a schedule of products (the setup): the products are free values, since no
-# property reads one; a mutant shows once a triangle has been through (end + 6 clocks),
-# a cover of two triangles out after two
-SCHEDULED = {"setup"}
+# parts on a schedule of products (the setup, the row engines): the products are free
+# values, since no property reads one; a mutant shows once an item has been through (the
+# clocks given here, and 5 more), a cover of two items out after two
+SCHEDULED = {"setup": lambda part: part.end + 1,
+             "row_engine": lambda part: part.offset,
+             "row_engine_serial": lambda part: part.offset}
 
 MUTANTS = {   # name: (what it breaks, the property that must catch it)
     "dropped": ("a fragment offered is taken and lost on its way out", "order"),
@@ -96,9 +104,12 @@ MUTANTS = {   # name: (what it breaks, the property that must catch it)
     "stuck": ("the output stops offering fragments", "drain"),
     "overrun": ("the queue's space stays high: the engine starts rows it has no place for",
                 "credit"),
+    "lost_write": ("a row's last write into the queue is left out once", "drain"),
+    "extra_write": ("a write into the queue comes with no row for it", "order"),
 }
 CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "credit", "on_screen",
-                             "rows_", "culled", "pending_", "valid_next", "inv_")),
+                             "rows_", "culled", "pending_", "valid_next", "handshake",
+                             "early", "inv_")),
           "cover": ("cover", None)}
 
 
@@ -683,6 +694,111 @@ def setup_wires(part):
             + [(f"s_running{k}", f"su_running{k}") for k in range(n_run)])
 
 
+def row_engine(serial=False):
+    """The row engine as the raster builds it at ``RASTER``'s size (one channel: the serial
+    engine's row is then one job)."""
+    return _raster(**({"row_serial": 1} if serial else {})).submodules.row_engine
+
+
+def _phases(part):
+    """The prefix of the row engine's schedule (its phase bits ``<prefix>_ph<k>``)."""
+    return "re" if re.search(r"\bre_ph1\b", export(part, "f_row_engine")) else "rs"
+
+
+def row_engine_harness(part, module, mutant=None, only=None):
+    """The Verilog of ``formal_top``: the row engine as ``module``; rows from the walker,
+    free but held until taken (the walker's ``held``, proven); the row queue's credit
+    (``space``) free. Against a reference of its starts delayed by its write's offset D:
+
+    - ``handshake``: a row is started exactly when one is taken; ``credit``: only on a credit;
+    - ``early``: what a row only carries is written as it starts;
+    - ``order``: the last write comes only D clocks after a start; ``drain``: D clocks after
+      each start, it comes. So each row started is written once, in order, and never late.
+
+    The invariants: the schedule's phase bits are the starts delayed."""
+    ins = {k: (getattr(part.i, k).shape()) for k in part.rows}
+    W = sum(s.width for s in ins.values())
+    D, C, pre = part.offset, COUNT, _phases(part)
+    at, conn = 0, []
+    for k, s in ins.items():
+        conn.append(f".i__{k}(free[{at + s.width - 1}:{at}])")
+        at += s.width
+    L = ["`default_nettype none", "module formal_top(input wire clk);",
+         "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;", "  wire rst = init;",
+         "  (* anyseq *) reg i_valid, space, stop;", f"  (* anyseq *) reg [{W - 1}:0] free;",
+         "  wire i_ready, started, d_written, busy, early_en;",
+         f"  reg [{W - 1}:0] past_in;", "  reg past_istall = 1'b0, dead = 1'b0, used = 1'b0;",
+         "  always @(posedge clk) begin past_istall <= ~rst & i_valid & ~i_ready; "
+         "past_in <= free; end",
+         "  always @* if (past_istall) in_held: assume(i_valid && free == past_in);",
+         "  always @(posedge clk) if (stop) dead <= 1'b1;"]
+    # the mutants: the engine sees the queue's space high once stopped (overrun); a last
+    # write left out, or one added, once
+    dut_space = "space | dead" if mutant == "overrun" else "space"
+    L += [f"  {module} dut (.clk(clk), .rst(rst), .i__valid(i_valid), .i__ready(i_ready), "
+          + ", ".join(conn) + f", .space({dut_space}), .started(started), "
+          ".written(d_written), .busy(busy), .early__en(early_en));"]
+    if mutant == "lost_write":
+        L += ["  wire now = stop & ~used & d_written;",
+              "  always @(posedge clk) if (now) used <= 1'b1;",
+              "  wire written = d_written & ~now;"]
+    elif mutant == "extra_write":
+        L += ["  wire now = stop & ~used & ~d_written;",
+              "  always @(posedge clk) if (now) used <= 1'b1;",
+              "  wire written = d_written | now;"]
+    elif mutant in (None, "overrun"):
+        L += ["  wire written = d_written;"]
+    else:
+        raise ValueError(f"the row engine has no mutant {mutant!r}")
+    L += [f"  reg [{D}:1] dl = 0;",
+          f"  always @(posedge clk) dl <= rst ? {D}'d0 : "
+          + (f"{{dl[{D - 1}:1], started}};" if D > 1 else "started;"),
+          f"  reg [{C - 1}:0] n_w = 0;",
+          "  always @(posedge clk) if (!rst) n_w <= n_w + written;",
+          "  always @* if (!rst) begin",
+          "    handshake: assert(started == (i_valid && i_ready));",
+          "    if (started) credit: assert(space);",
+          "    early: assert(early_en == started);",
+          f"    if (written) order: assert(dl[{D}]);",
+          f"    if (dl[{D}]) drain: assert(written);",
+          "    c_two: cover(written && n_w == 1);",
+          "    c_stall: cover(i_valid && !i_ready && space);",
+          "  end"]
+    ph, sel = _engine_state(part)
+    L += [f"  (* keep *) wire s_ph{k};" for k in ph] + [f"  (* keep *) wire s_sel{k};" for k in sel]
+    L += ["  always @* if (!rst) begin",
+          *[f"    inv_ph{k}: assert(s_ph{k} == dl[{k}]);" for k in ph],
+          # one channel (RASTER): every job is its row's only one, so the serial engine's
+          # channel select (``s_sel0``) is 1, and so is its capture at the start (read from
+          # offset 1) and its copy made at offset k (read from k + 1) while a job is past it
+          *[f"    inv_sel{k}: assert(s_sel0);" if k == 0 else
+            f"    inv_sel{k}: assert(!(|dl[{D}:{k + (k > 1)}]) || s_sel{k});" for k in sel],
+          "  end", "endmodule"]
+    return keep_only("\n".join(L) + "\n", only)
+
+
+def _engine_state(part):
+    """The offsets of the row engine's phase bits up to its write's, and of the serial
+    engine's channel select (0), its capture (1) and its late copies."""
+    pre, text = _phases(part), export(part, "f_row_engine")
+    ph = [k for k in range(1, part.offset + 1) if re.search(rf"\b{pre}_ph{k}\b", text)]
+    sel = sorted({int(k) for k in re.findall(r"\brs_sel_at(\d+)\b", text)})
+    if sel:                                      # the select, and its capture at the start
+        assert RASTER["channels"] == 1
+        sel = [0, 1, *sel]
+    return ph, sel
+
+
+def row_engine_wires(part):
+    pre = _phases(part)
+    ph, sel = _engine_state(part)
+    names = {0: "rs_sel0", 1: "rs_sel"}
+    return ([(f"s_ph{k}", f"{pre}_ph{k}") for k in ph]
+            + [(f"s_sel{k}", names.get(k, f"rs_sel_at{k}")) for k in sel])
+
+
+ENGINE = ("lost_write", "extra_write", "overrun")
+
 # the parts: name -> (the part, its harness, the wires its invariants read, its mutants)
 STREAM = ("dropped", "extra", "unstable", "stuck")
 PARTS = {
@@ -693,6 +809,9 @@ PARTS = {
                          (*STREAM, "overrun")),
     "setup_queue": (setup_queue, queue_harness, queue_wires, (*STREAM, "overrun")),
     "setup": (setup, setup_harness, setup_wires, STREAM),
+    "row_engine": (row_engine, row_engine_harness, row_engine_wires, ENGINE),
+    "row_engine_serial": (lambda: row_engine(serial=True), row_engine_harness,
+                          row_engine_wires, ENGINE),
 }
 
 
@@ -722,10 +841,10 @@ def run(name, check, mutant=None, timeout=None, part=None):
     if mutant:                  # a BMC of the one property it breaks (an overrun: once the
         #                         queue is full, ``depth`` rows after the first start)
         mode, only = "bmc", (MUTANTS[mutant][1],)
-        depth = (part.depth + 4 if mutant == "overrun" else
-                 part.end + 6 if name in SCHEDULED else MUTANT_DEPTH)
-    elif mode == "cover":                  # a scheduled part: two triangles through
-        depth = 2 * (part.end + 3) if name in SCHEDULED else COVER_DEPTH
+        depth = (part.depth + 4 if mutant == "overrun" and hasattr(part, "depth") else
+                 SCHEDULED[name](part) + 5 if name in SCHEDULED else MUTANT_DEPTH)
+    elif mode == "cover":                  # a scheduled part: two items through
+        depth = 2 * (SCHEDULED[name](part) + 2) if name in SCHEDULED else COVER_DEPTH
     tag = name + (f"_{mutant}" if mutant else "") + f"_{check}"
     work = OUT / tag
     module = f"f_{name}"

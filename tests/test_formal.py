@@ -98,7 +98,7 @@ def test_the_tables_stand_in_replaces_roms_only(tmp_path):
 
 @pytest.mark.skipif(shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None,
                     reason="yowasp-sby is not installed")
-@pytest.mark.parametrize("name", ["stepper", "walker"])
+@pytest.mark.parametrize("name", ["stepper", "walker", "row_engine"])
 def test_a_raster_part_proven_and_its_mutants_caught(name):
     """A raster's part alone (flows/parts.py; make formal adds its covers, and the row queue
     as the serial engine writes it): held, no_extra, order, drain (and the queue's credit)

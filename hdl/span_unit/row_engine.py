@@ -48,7 +48,8 @@ class RowEngine(wiring.Component):
         self.const_fields, self.index_bits = consts or (None, 0)
         form = _form(plan, tuple(self.rows.items()), self.flat,
                      consts and (tuple(consts[0].items()), consts[1]))
-        self.memories, self.ii, self.length = form
+        # its memories, its row interval and length, and its last write's offset from the start
+        self.memories, self.ii, self.length, self.offset = form
         members = {"i": In(wiring.Signature({"valid": Out(1), "ready": In(1),
                                              **{k: Out(s) for k, s in self.rows.items()}})),
                    "space": In(1), "started": Out(1), "written": Out(1), "busy": Out(1)}
@@ -82,8 +83,9 @@ class RowEngine(wiring.Component):
 
 @functools.lru_cache(maxsize=None)
 def _form(plan, rows, flat, consts):
-    """The engine's memories (``{name: ({field: shape}, slotted)}``), its row interval and
-    its length, from a build of it on its own."""
+    """The engine's memories (``{name: ({field: shape}, slotted)}``), its row interval, its
+    length and the offset of a row's last write from its start, from a build of it on its
+    own."""
     m = Module()
     rows = {k: Signal(s, name=k) for k, s in rows}
     link = SimpleNamespace(valid=Signal(), ready=Signal())
@@ -95,4 +97,4 @@ def _form(plan, rows, flat, consts):
     Fragment.get(m, None)                        # (its memories used, for Amaranth's checks)
     memories = {name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None)
                 for name, vals, _, slot in writes}
-    return memories, t["ii"], t["length"]
+    return memories, t["ii"], t["length"], t["written"]

@@ -124,7 +124,8 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     sc.finish()
     sc.check()
     writes = [("late", out, out_valid, None), ("early", early, sc.start, None)]
-    return writes, sc.start, out_valid, {"ii": sc.ii, "length": sc.length, "busy": sc.busy()}
+    return writes, sc.start, out_valid, {"ii": sc.ii, "length": sc.length, "busy": sc.busy(),
+                                          "written": end + 1}
 
 
 def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=3,
@@ -209,7 +210,8 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     sc.check()
     busy = Signal(name="rs_busy")
     m.d.comb += busy.eq(sc.busy() | under)
-    timing = {"ii": channels * ii, "length": (channels - 1) * ii + at, "busy": busy}
+    timing = {"ii": channels * ii, "length": (channels - 1) * ii + at, "busy": busy,
+              "written": at}
     return writes, started, last, timing
 
 
