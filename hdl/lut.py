@@ -10,8 +10,8 @@ import operator
 
 import numpy as np
 from amaranth.hdl import Cat, Mux, Value
-from amaranth.lib.memory import Memory
 
+from .bram import table_slice
 from .fixed import Fixed
 
 __all__ = ["Lut", "build_lut", "blank_lut", "rom", "read_roms", "WriteBus"]
@@ -141,10 +141,10 @@ class RomRead:
 
 
 def rom(lut, addr, name, load=None):
-    """A read of ``lut`` at ``addr``, for ``p.stage(v, out=rom(...))``: the value is the
-    table's read register at the next stage. Register it once more (a plain stage,
-    ``v = p.stage(v)``) before any logic, so that the RAM's clock-to-output (5.8 ns on ECP5
-    without its output register, which Yosys does not infer) is never in series with logic.
+    """A read of ``lut`` at ``addr``, for ``p.stage(v, out=rom(...))``, then a plain stage
+    (``v = p.stage(v)``), whose register is the RAM's output register (``hdl.bram``): the
+    value is there, two registers after the address, and the RAM's clock-to-output is never
+    in series with logic. Logic on it in between is an error (it is not a value yet).
     ``name`` is made unique within the module.
 
     ``load``: the table is scene data (a power table's shininess), named so. Where the
@@ -166,11 +166,13 @@ def slice_width(depth):
 
 
 def read_roms(p, reads):
-    """Build ``{key: RomRead}`` in pipeline ``p``: synchronous read ports enabled with the
-    stage, two reads of one table sharing a memory (a block RAM has two ports), each table cut
-    by width into slices one RAM deep (``slice_width``), so nothing stands between a RAM and
-    its register: a table of ``2**k + 1`` entries (both ends of a quarter wave) takes RAMs
-    ``2**(k+1)`` deep rather than a mux for its last entry. Returns ``{key: value}``."""
+    """Build ``{key: RomRead}`` in pipeline ``p``: each read registered twice while the stage
+    is enabled, the RAM's read register and its output register (``hdl.bram.table_slice``: on
+    ECP5 the block's own), so the value is the next stage's register. Two reads of one table
+    share a memory (a block RAM has two ports); each table is cut by width into slices one
+    RAM deep (``slice_width``), so nothing stands between a RAM and its register: a table of
+    ``2**k + 1`` entries (both ends of a quarter wave) takes RAMs ``2**(k+1)`` deep rather
+    than a mux for its last entry. Returns ``{key: output register}``."""
     groups = {}
     host = getattr(p, "host", {})
     for key, r in reads.items():
@@ -189,23 +191,18 @@ def read_roms(p, reads):
             # deeper than one RAM (a texture): one memory, which Yosys cascades itself
             step = slice_width(len(stored)) if len(stored) <= 16384 else lut.fmt.width
             name = p.unique("_".join(r.name for _, r in pair))
-            mems = []
+            slices = []
             for k, lo in enumerate(range(0, lut.fmt.width, step)):
                 bits = min(step, lut.fmt.width - lo)
                 init = [] if bus else [int(v) for v in (raw >> lo) & ((1 << bits) - 1)]
-                mems.append(Memory(shape=bits, depth=len(stored), init=init))
-                p.m.submodules[name if lut.fmt.width <= step else f"{name}_{k}"] = mems[-1]
-                if bus:
-                    wr = mems[-1].write_port()
-                    p.m.d.comb += [wr.en.eq(bus.en), wr.addr.eq(bus.addr),
-                                   wr.data.eq(bus.data[lo:lo + bits])]
-            for key, r in pair:
-                parts = []
-                for mem in mems:
-                    port = mem.read_port(domain="sync")
-                    p.m.d.comb += [port.addr.eq(r.addr), port.en.eq(p.en)]
-                    parts.append(port.data)
-                out[key] = Cat(*parts).as_signed() if lut.fmt.signed else Cat(*parts)
+                write = (bus.en, bus.addr, bus.data[lo:lo + bits]) if bus else None
+                slices.append(table_slice(p.m, name if lut.fmt.width <= step else
+                                          f"{name}_{k}", len(stored), bits, init,
+                                          [r.addr for _, r in pair], p.en, p.platform,
+                                          write))
+            for j, (key, r) in enumerate(pair):
+                value = Cat(*(s[j] for s in slices))
+                out[key] = value.as_signed() if lut.fmt.signed else value
     return out
 
 

@@ -93,7 +93,8 @@ def param_range(default, allowed, per_channel=False):
 
 
 class _Pending:
-    """A product (:class:`hdl.dsp.Product`) between its input and its output register."""
+    """A product (:class:`hdl.dsp.Product`) or a table read (:func:`hdl.lut.rom`) between its
+    input and its output register."""
 
     def __init__(self, product):
         self.product = product
@@ -141,11 +142,13 @@ class Pipeline:
         popped from ``v`` in ``new``'s expressions and are not carried further."""
         self.stages += 1
         values = {**v, **new}
-        out = read_roms(self, {k: r for k, r in values.items() if isinstance(r, RomRead)})
+        # a table read's value is its output register: the next stage's (hdl.bram)
+        out = {k: _Pending(q) for k, q in read_roms(
+            self, {k: r for k, r in values.items() if isinstance(r, RomRead)}).items()}
         for name, value in values.items():
             if name in out:
                 continue
-            if isinstance(value, _Pending):        # a product's output register: this stage's
+            if isinstance(value, _Pending):        # a product's or a table's output register
                 out[name] = value.product
                 continue
             if isinstance(value, Product):         # its operands into the block's registers

