@@ -41,7 +41,7 @@ def initvals(words):
     return out
 
 
-def _port(side, addr, en, we=Const(0), data=Const(0, WIDTH), out=None, write=False):
+def _port(side, addr, en, oe, we=Const(0), data=Const(0, WIDTH), out=None, write=False):
     """Port ``side`` (A or B) in the 18-bit form: the word address on AD[13:4]; a write port
     sets both byte enables (AD[1:0]) and holds its output register still."""
     ad = Value.cast(addr)
@@ -50,22 +50,24 @@ def _port(side, addr, en, we=Const(0), data=Const(0, WIDTH), out=None, write=Fal
     ports.update({f"i_DI{side}{k}": Value.cast(data)[k] if k < len(Value.cast(data))
                   else Const(0) for k in range(WIDTH)})
     ports.update({f"i_CS{side}{k}": Const(0) for k in range(3)})
-    ports.update({f"i_CLK{side}": ClockSignal(), f"i_CE{side}": en, f"i_OCE{side}": en,
+    ports.update({f"i_CLK{side}": ClockSignal(), f"i_CE{side}": en, f"i_OCE{side}": oe,
                   f"i_WE{side}": we, f"i_RST{side}": Const(0)})
     if out is not None:
         ports.update({f"o_DO{side}{k}": out[k] for k in range(len(out))})
     return ports
 
 
-def table_slice(m, name, depth, bits, init, addrs, en, platform, write=None):
+def table_slice(m, name, depth, bits, init, addrs, en, platform, write=None, out_en=None):
     """A slice of ``bits`` x ``depth`` (``init``: its words, or empty for a loaded table) read
-    at each of ``addrs`` (one or two), both reads registered twice while ``en`` is high.
-    ``write`` is ``(en, addr, data)``, the host's port of a loaded table (then one read).
-    Returns the output registers, one per read."""
+    at each of ``addrs`` (one or two): the read register loads while ``en`` is high, the
+    output register while ``out_en`` is (``en`` by default: a pipeline's stage; a schedule's
+    read loads it a clock after the address). ``write`` is ``(en, addr, data)``, the host's
+    port of a loaded table (then one read). Returns the output registers, one per read."""
     if write is not None and len(addrs) != 1:
         raise ValueError(f"{name}: a loaded table has one read port beside its write port")
     if not 1 <= len(addrs) <= 2:
         raise ValueError(f"{name}: a block RAM has two ports, not {len(addrs)} reads")
+    oe = en if out_en is None else out_en
     outs = [Signal(bits, name=f"{name}_q{k}" if len(addrs) > 1 else f"{name}_q",
                    reset_less=True) for k in range(len(addrs))]
     if ecp5(platform) and block_fits(depth, bits):
@@ -76,14 +78,13 @@ def table_slice(m, name, depth, bits, init, addrs, en, platform, write=None):
         if write is not None:                      # A writes, B reads
             we, wa, wd = write
             params.update(p_REGMODE_A="NOREG", p_REGMODE_B="OUTREG",
-                          **_port("A", wa, Const(1), we, wd, write=True),
-                          **_port("B", addrs[0], en, out=outs[0]))
+                          **_port("A", wa, Const(1), Const(1), we, wd, write=True),
+                          **_port("B", addrs[0], en, oe, out=outs[0]))
         else:
-            spare = addrs[1] if len(addrs) > 1 else Const(0)
             params.update(p_REGMODE_A="OUTREG", p_REGMODE_B="OUTREG",
-                          **_port("A", addrs[0], en, out=outs[0]),
-                          **_port("B", spare, en if len(addrs) > 1 else Const(0),
-                                  out=outs[1] if len(addrs) > 1 else None))
+                          **_port("A", addrs[0], en, oe, out=outs[0]),
+                          **(_port("B", addrs[1], en, oe, out=outs[1]) if len(addrs) > 1
+                             else _port("B", Const(0), Const(0), Const(0))))
         m.submodules[name] = Instance("DP16KD", **params)
         return outs
     mem = Memory(shape=bits, depth=depth, init=[int(w) for w in init])
@@ -94,6 +95,6 @@ def table_slice(m, name, depth, bits, init, addrs, en, platform, write=None):
     for addr, q in zip(addrs, outs):
         port = mem.read_port(domain="sync")
         m.d.comb += [port.addr.eq(addr), port.en.eq(en)]
-        with m.If(en):
+        with m.If(oe):
             m.d.sync += q.eq(port.data)               # the output register's place
     return outs

@@ -22,8 +22,8 @@ the result is written at ``issue + MUL_LAT`` (one more with ``mux_groups``) and 
 clock later.
 """
 from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
-from amaranth.lib.memory import Memory
 
+from .bram import table_slice
 from .dsp import mult18
 from .term import Term, term
 
@@ -292,20 +292,25 @@ class Schedule:
         return (self._ntotals if narrow else self._totals)[idx]
 
     def rom(self, name, lut, addr):
-        """``lut[addr]``: a synchronous read, then its own register (the RAM's clock to output
-        is never in series with logic)."""
+        """``lut[addr]``: a synchronous read, then the RAM's output register (``hdl.bram``:
+        the block's own on ECP5, in 18-bit slices), so its clock to output is never in series
+        with logic; a register of the schedule's, written a clock after the address."""
         k = self.when(addr)
         addr = self.late_at(addr, k)
         self.read(k, addr)
-        mem = Memory(shape=unsigned(lut.fmt.width), depth=len(lut.contents),
-                     init=[int(v) & ((1 << lut.fmt.width) - 1) for v in lut.contents])
-        self.m.submodules[f"{self.name}_{name}_rom"] = mem
-        port = mem.read_port()
-        self.m.d.comb += [port.addr.eq(addr), port.en.eq(self.en & self.at(k))]
-        self.ready[port.data] = k + 1
-        data = self._leaf(port.data)
-        data = data.as_signed() if lut.fmt.signed else data
-        return self.let(name, data)
+        width = lut.fmt.width
+        raw = [int(v) & ((1 << width) - 1) for v in lut.contents]
+        outs = [table_slice(self.m, f"{self.name}_{name}_rom{lo // 18}", len(raw),
+                            min(18, width - lo), [(v >> lo) & ((1 << min(18, width - lo)) - 1)
+                                                  for v in raw],
+                            [addr], self.en & self.at(k), self.platform,
+                            out_en=self.en & self.at(k + 1))[0]
+                for lo in range(0, width, 18)]
+        reg = Signal(lut.fmt.shape, name=f"{self.name}_{name}")
+        self.m.d.comb += reg.eq(Cat(*outs))
+        self.ready[reg], self.written[reg] = k + 2, k + 1
+        self.length = max(self.length, k + 2)
+        return self._leaf(reg)
 
     def divide(self, name, num, den, q_bits):
         """Unsigned restoring division, one quotient bit per clock: ``(q, r)`` registers with

@@ -188,21 +188,24 @@ TABLE = np.random.default_rng(16).integers(0, 1 << 11, 640)      # the power tab
 
 class _Tables(wiring.Component):
     """hdl.bram.table_slice as the pipelines use it: a ROM read at two addresses (ports A and
-    B) and a loaded table (the host's writes on A, a read on B), 640 x 11 like the power
-    table."""
+    B), a loaded table (the host's writes on A, a read on B), 640 x 11 like the power
+    table, and a ROM whose output register has an enable of its own (a schedule's read)."""
     a: In(10).array(3)
     en: In(1)
+    oe: In(1)
     we: In(1)
     wa: In(10)
     wd: In(11)
-    q: Out(11).array(3)
+    q: Out(11).array(4)
 
     def elaborate(self, platform):
         m = Module()
         rom = table_slice(m, "rom", 640, 11, TABLE, [self.a[0], self.a[1]], self.en, platform)
         ram = table_slice(m, "ram", 640, 11, [], [self.a[2]], self.en, platform,
                           (self.we, self.wa, self.wd))
-        m.d.comb += [q.eq(x) for q, x in zip(self.q, rom + ram)]
+        late = table_slice(m, "late", 640, 11, TABLE, [self.a[0]], self.en, platform,
+                           out_en=self.oe)
+        m.d.comb += [q.eq(x) for q, x in zip(self.q, rom + ram + late)]
         return m
 
 
@@ -239,7 +242,9 @@ def test_ecp5_block_rams_read_through_their_output_registers(tmp_path):
     with a model of the block written from Lattice's memory guide (tests/data): every read is
     the table's entry two enabled clocks after its address, on both ports of a ROM and on a
     table the host loads through the other port, with the enable toggling; and the
-    behavioural form (every other target) gives the same values on the same clocks."""
+    behavioural form (every other target) gives the same values on the same clocks; with an
+    output enable of its own, the output register holds the read register's word of its
+    last enabled clock."""
     rng = np.random.default_rng(17)
     n, load = 3000, 640
     loaded = rng.integers(0, 1 << 11, 640)
@@ -249,23 +254,25 @@ def test_ecp5_block_rams_read_through_their_output_registers(tmp_path):
     we[:load] = 1
     wa, wd = np.arange(n) % 640, loaded[np.arange(n) % 640]
     en[:load] = 0                                  # the host loads while nothing is read
+    oe = (rng.random(n) < 0.5).astype(int)
     rows = [(int(addr[t, 0]), int(addr[t, 1]), int(addr[t, 2]), int(en[t]), int(we[t]),
-             int(wa[t]), int(wd[t])) for t in range(n)]
+             int(wa[t]), int(wd[t]), int(oe[t])) for t in range(n)]
     top = verilog.convert(_Tables(), name="top", emit_src=False, platform=Target("ecp5"))
-    assert top.count("DP16KD") == 2 and top.count('"OUTREG"') == 3
+    assert top.count("DP16KD") == 3 and top.count('"OUTREG"') == 5
     (tmp_path / "top.v").write_text(top)
     (tmp_path / "vec.hex").write_text("".join(
-        f"{a0 | a1 << 10 | a2 << 20 | e << 30 | w << 31 | x << 32 | d << 42:014x}\n"
-        for a0, a1, a2, e, w, x, d in rows))
+        f"{a0 | a1 << 10 | a2 << 20 | e << 30 | w << 31 | x << 32 | d << 42 | o << 53:014x}\n"
+        for a0, a1, a2, e, w, x, d, o in rows))
     (tmp_path / "tb.v").write_text(f"""module tb;
-  reg clk = 0, rst = 0; reg [9:0] a0, a1, a2, wa; reg en, we; reg [10:0] wd;
-  reg [52:0] vec [0:{n - 1}]; wire [10:0] q0, q1, q2; integer i, f;
-  top dut(.clk(clk), .rst(rst), .a__0(a0), .a__1(a1), .a__2(a2), .en(en), .we(we), .wa(wa),
-          .wd(wd), .q__0(q0), .q__1(q1), .q__2(q2));
+  reg clk = 0, rst = 0; reg [9:0] a0, a1, a2, wa; reg en, we, oe; reg [10:0] wd;
+  reg [53:0] vec [0:{n - 1}]; wire [10:0] q0, q1, q2, q3; integer i, f;
+  top dut(.clk(clk), .rst(rst), .a__0(a0), .a__1(a1), .a__2(a2), .en(en), .oe(oe), .we(we),
+          .wa(wa), .wd(wd), .q__0(q0), .q__1(q1), .q__2(q2), .q__3(q3));
   initial begin
     $readmemh("vec.hex", vec); f = $fopen("out.txt");
     for (i = 0; i < {n}; i = i + 1) begin
-      {{wd, wa, we, en, a2, a1, a0}} = vec[i]; #1 clk = 1; #1 $fwrite(f, "%h %h %h\\n", q0, q1, q2);
+      {{oe, wd, wa, we, en, a2, a1, a0}} = vec[i]; #1 clk = 1;
+      #1 $fwrite(f, "%h %h %h %h\\n", q0, q1, q2, q3);
       clk = 0;
     end
     $finish;
@@ -282,10 +289,10 @@ endmodule
     dut, sim_got = _Tables(), []
 
     async def bench(ctx):
-        for a0, a1, a2, e, w, x, d in rows:
+        for a0, a1, a2, e, w, x, d, o in rows:
             for port, v in zip(dut.a, (a0, a1, a2)):
                 ctx.set(port, v)
-            for port, v in ((dut.en, e), (dut.we, w), (dut.wa, x), (dut.wd, d)):
+            for port, v in ((dut.en, e), (dut.we, w), (dut.wa, x), (dut.wd, d), (dut.oe, o)):
                 ctx.set(port, v)
             await ctx.tick()
             sim_got.append([ctx.get(q) for q in dut.q])
@@ -293,12 +300,15 @@ endmodule
     sim.add_clock(1e-6)
     sim.add_testbench(bench)
     sim.run()
-    held, checked = [], 0
-    for t, (a0, a1, a2, e, *_) in enumerate(rows):
+    held, checked, latch, late = [], 0, None, None
+    for t, (a0, a1, a2, e, *_, o) in enumerate(rows):
+        if o:                                           # the edge: the output register first
+            late = latch
         if e:
             held.append((TABLE[a0], TABLE[a1], loaded[a2]))
-        if len(held) >= 2:                              # two enabled edges since the address
-            want = list(map(int, held[-2]))
+            latch = int(TABLE[a0])
+        if len(held) >= 2 and late is not None:         # two enabled edges since the address
+            want = [*map(int, held[-2]), late]
             assert got[t] == want and sim_got[t] == want, f"cycle {t}"
             checked += 1
     assert checked > 1500
