@@ -17,8 +17,9 @@ the model (scene/framebuffer.py) clamps the same.
 **Read-modify-write.** A fragment's depth is read in the clock it is taken, registered in the
 next (the block RAM's output is slow), tested in the third and written in the fourth. So the
 three fragments ahead of it write after its read: where one of them shares its pixel, its test
-takes that write's depth instead, the newest first (forwarding). Whether they share it is
-registered a clock ahead, and the four depth compares run side by side.
+takes that write's depth instead, the newest first (forwarding). All but the newest write's
+enable and the read are known a clock ahead, so the pixel matches and three of the four depth
+compares are registers, and the test is the read's compare and a select.
 Fragments outside the image are counted (``outside``) and dropped.
 """
 from amaranth.hdl import Cat, Module, Mux, Signal, signed
@@ -92,23 +93,25 @@ class Framebuffer(wiring.Component):
         with m.If(take & ~inside):
             m.d.sync += self.outside.eq(self.outside + 1)
         # the writes stage 2's read missed: the one being made now (w) and the two before
-        # (h1, h2), the newest first where they share its pixel. Whether they share it is
-        # known a clock ahead (stage 1 against what will be w, h1 and h2), and the depth is
-        # compared with all four at once, so the test is a select of four compares
+        # (h1, h2), the newest first where they share its pixel. Everything but stage 2's
+        # read and whether w writes is known a clock ahead (stage 1 against what will be w, h1
+        # and h2: w, h1 and h1's predecessor), so it is registered there: whether h1 or h2
+        # holds the pixel (the newer of the two) and the compares with their depths. The test is then one
+        # compare (with the read) and a select of registers: the block RAM's read into w_en
+        # stays short
         w = (Signal(name="w_en"), Signal(range(self.words), name="w_addr"),
              Signal(signed(16), name="w_depth"), Signal(16, name="w_rgb"))
         h1 = (Signal(name="h1_en"), Signal(range(self.words), name="h1_addr"),
               Signal(signed(16), name="h1_depth"))
-        h2 = (Signal(name="h2_en"), Signal(range(self.words), name="h2_addr"),
-              Signal(signed(16), name="h2_depth"))
-        same = [Signal(name=f"same_{n}") for n in ("w", "h1", "h2")]
-        m.d.sync += [same[0].eq(a1 == a2), same[1].eq(a1 == w[1]), same[2].eq(a1 == h1[1])]
-        nearer = v2 & (d2 > read)
-        for (en, _, d), hit in ((h2, same[2]), (h1, same[1]), (w[:3], same[0])):
-            nearer = Mux(en & hit, v2 & (d2 > d), nearer)       # the newest wins
-        win = nearer
+        same_w, in_h, near_w, near_h = (Signal(name=n) for n in
+                                        ("same_w", "in_h", "near_w", "near_h"))
+        hit1 = w[0] & (a1 == w[1])              # what will be h1 holds stage 1's pixel
+        hit2 = h1[0] & (a1 == h1[1])            # what will be h2
+        m.d.sync += [same_w.eq(a1 == a2), near_w.eq(d1 > d2), in_h.eq(hit1 | hit2),
+                     near_h.eq(Mux(hit1, d1 > w[2], d1 > h1[2]))]
+        win = v2 & Mux(w[0] & same_w, near_w, Mux(in_h, near_h, d2 > read))
         m.d.sync += [w[0].eq(win), w[1].eq(a2), w[2].eq(d2), w[3].eq(c2),
-                     *[x.eq(y) for x, y in zip(h1, w[:3])], *[x.eq(y) for x, y in zip(h2, h1)]]
+                     *[x.eq(y) for x, y in zip(h1, w[:3])]]
         with m.If(win):
             m.d.sync += self.written.eq(self.written + 1)
 

@@ -328,21 +328,18 @@ def _framebuffer_rtl(W, H, frags, p_valid=0.8, seed=4):
                 await ctx.tick("pixel")
                 await ctx.tick("pixel")
                 img[y, x] = expand565(ctx.get(dut.rd_data))
-        done["outside"] = ctx.get(dut.outside)
+        done["outside"], done["written"] = ctx.get(dut.outside), ctx.get(dut.written)
     sim = Simulator(dut)
     sim.add_clock(1e-8)
     sim.add_clock(4e-8, domain="pixel")
     sim.add_testbench(bench)
     sim.run()
-    return img, done["outside"]
+    return img, done["outside"], done["written"]
 
 
-def test_framebuffer_depth_test_equals_its_model():
+def _hazards(rng, n):
     """1,500 fragments on a 12 x 10 image (a 16-wide plane), many back to back on one pixel
-    (the read-modify-write hazard), ties, the least depth, and fragments outside the image:
-    the plane equals the model's (scene/framebuffer.py) pixel for pixel."""
-    rng = random.Random(6)
-    W, H, n = 12, 10, 1500
+    (the read-modify-write hazard), ties, the least depth, and fragments outside the image."""
     frags = {"x": [], "y": [], "depth": [], "r": [], "g": [], "b": []}
     for k in range(n):
         if k and rng.random() < 0.5:                 # the same pixel as the one before
@@ -351,13 +348,42 @@ def test_framebuffer_depth_test_equals_its_model():
             frags["x"].append(rng.randrange(14)); frags["y"].append(rng.randrange(11))
         frags["depth"].append(rng.choice([rng.randrange(-32768, 32768), rng.randrange(-2, 3),
                                           -32768, -32767]))
-        for c in "rgb":
-            frags[c].append(rng.randrange(256))
-    img, outside = _framebuffer_rtl(W, H, frags, p_valid=0.9)
+    return frags
+
+
+def _rising(rng, n):
+    """Three pixels in any order with slowly rising depths, so that the three writes ahead of
+    a fragment often hold its pixel in every combination, each nearer than the last."""
+    frags = {"x": [], "y": [], "depth": []}
+    for k in range(n):
+        frags["x"].append(rng.choice([3, 4, 5])); frags["y"].append(2)
+        frags["depth"].append(k // 6 + rng.randrange(-5, 6))
+    return frags
+
+
+@pytest.mark.parametrize("make, n, p_valid", [(_hazards, 1500, 0.9), (_rising, 3000, 0.97)],
+                         ids=["hazards", "rising"])
+def test_framebuffer_depth_test_equals_its_model(make, n, p_valid):
+    """The plane equals the model's (scene/framebuffer.py) pixel for pixel, and the RTL made
+    exactly the writes of the depth test in stream order."""
+    rng = random.Random(6)
+    W, H = 12, 10
+    frags = make(rng, n)
+    for c in "rgb":
+        frags[c] = [rng.randrange(256) for _ in range(n)]
+    img, outside, written = _framebuffer_rtl(W, H, frags, p_valid=p_valid)
     model = board_frame((W, H), {k: np.array(v) for k, v in frags.items()},
                         expand565(0x1234) / 255)
     assert (img == model).all(), np.argwhere((img != model).any(-1))[:5]
     assert outside == sum(x >= W or y >= H for x, y in zip(frags["x"], frags["y"]))
+    # every write, not only the last at each pixel: a fragment writes when it is nearer than
+    # all before it at its pixel (a wrong forwarding choice writes where it should not, or
+    # fails to, and a later write may hide it in the plane)
+    best, wins = {}, 0
+    for x, y, d in zip(frags["x"], frags["y"], frags["depth"]):
+        if x < W and y < H and max(d, -32767) > best.get((x, y), -32768):
+            best[(x, y)], wins = max(d, -32767), wins + 1
+    assert written == wins
 
 
 # ---- one whole frame on Verilator -----------------------------------------------------------
