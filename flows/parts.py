@@ -62,11 +62,15 @@ in, a free ready out, every product a free value; ``held``, ``no_extra``, ``orde
 schedule's length), ``valid_next``; the invariants tie the schedule's phase bits and its
 copies of its flags to the counts.
 
-**The row engines** (``hdl/span_unit/row_engine.py``), both forms: rows held until taken, a
-free credit; ``handshake`` and ``credit`` (a row starts exactly when taken, only on a
-credit), ``early`` (its carried values written at the start), ``order`` and ``drain`` (its
-last write exactly D clocks after each start); the invariants tie the schedule's phase bits
-to the starts delayed.
+**The row engines** (``hdl/span_unit/row_engine.py``), both forms, and **the overlapped
+setup's schedule** (``SetupSchedule``, the setup queue's producer): items held until taken, a
+free credit; ``handshake`` and ``credit`` (an item starts exactly when taken, only on a
+credit), ``interval`` (while a job is in flight, only a multiple of ``ii`` after the last
+start), ``early`` (the row engine's carried values written at the start), ``order`` and
+``drain`` (its last write exactly D clocks after each start), and the setup's ``slot_g*``
+(each memory written at its offset, at its triangle's slot); the invariants tie the
+schedule's phase bits to the starts delayed, its slot count to the clocks since the last
+start, and the setup's copies of a triangle's slot to the starts counted.
 
 ``python -m flows.parts [--only row_queue]``; ``make formal`` runs it too.
 """
@@ -95,7 +99,8 @@ SETUP_II = 48            # the setup queue's raster: a triangle every 48 clocks
 # clocks given here, and 5 more), a cover of two items out after two
 SCHEDULED = {"setup": lambda part: part.end + 1,
              "row_engine": lambda part: part.offset,
-             "row_engine_serial": lambda part: part.offset}
+             "row_engine_serial": lambda part: part.offset,
+             "setup_schedule": lambda part: part.offset}
 
 MUTANTS = {   # name: (what it breaks, the property that must catch it)
     "dropped": ("a fragment offered is taken and lost on its way out", "order"),
@@ -106,10 +111,11 @@ MUTANTS = {   # name: (what it breaks, the property that must catch it)
                 "credit"),
     "lost_write": ("a row's last write into the queue is left out once", "drain"),
     "extra_write": ("a write into the queue comes with no row for it", "order"),
+    "wrong_slot": ("a write into the setup queue at the next triangle's slot, once", "slot_"),
 }
 CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "credit", "on_screen",
                              "rows_", "culled", "pending_", "valid_next", "handshake",
-                             "early", "inv_")),
+                             "early", "interval", "slot_", "inv_")),
           "cover": ("cover", None)}
 
 
@@ -700,101 +706,207 @@ def row_engine(serial=False):
     return _raster(**({"row_serial": 1} if serial else {})).submodules.row_engine
 
 
+def setup_schedule():
+    """The overlapped setup's schedule (``SetupSchedule``, the setup queue's producer) as the
+    raster builds it with ``setup_ii=SETUP_II``."""
+    setup = _raster(setup_ii=SETUP_II).submodules.setup.elaborate(None)
+    Fragment.get(setup, None)
+    return setup.submodules.schedule
+
+
+def _module(part):
+    """The name a scheduled part's Verilog is read under for its state's names."""
+    return "f_setup_schedule" if hasattr(part, "consts") else "f_row_engine"
+
+
 def _phases(part):
-    """The prefix of the row engine's schedule (its phase bits ``<prefix>_ph<k>``)."""
-    return "re" if re.search(r"\bre_ph1\b", export(part, "f_row_engine")) else "rs"
+    """The prefix of a scheduled part's schedule (its phase bits ``<prefix>_ph<k>``)."""
+    text = export(part, _module(part))
+    return next(p for p in ("re", "rs", "su") if re.search(rf"\b{p}_ph1\b", text))
+
+
+def _engine_ports(part):
+    """The part's input port connections to ``free`` and their width: the walker's rows (a
+    member per field) or the setup's triangles (a stream's payload)."""
+    if not hasattr(part, "rows"):
+        return [".i__payload(free)"], part.i.payload.shape().size
+    at, conn = 0, []
+    for k in part.rows:
+        width = getattr(part.i, k).shape().width
+        conn.append(f".i__{k}(free[{at + width - 1}:{at}])")
+        at += width
+    return conn, at
 
 
 def row_engine_harness(part, module, mutant=None, only=None):
-    """The Verilog of ``formal_top``: the row engine as ``module``; rows from the walker,
-    free but held until taken (the walker's ``held``, proven); the row queue's credit
-    (``space``) free. Against a reference of its starts delayed by its write's offset D:
+    """The Verilog of ``formal_top``: a scheduled producer of a queue as ``module``, the row
+    engine (rows from the walker) or the overlapped setup (triangles), its items free but
+    held until taken (the walker's ``held``, proven; the stream contract), the queue's
+    credit (``space``) free. Against a reference of its starts delayed by its write's
+    offset D:
 
-    - ``handshake``: a row is started exactly when one is taken; ``credit``: only on a credit;
-    - ``early``: what a row only carries is written as it starts;
+    - ``handshake``: an item is started exactly when one is taken; ``credit``: only on a
+      credit; ``interval``: while a job is in flight, only a multiple of ``ii`` clocks after
+      the last start (so the jobs' products never collide);
+    - ``early``: what a row only carries is written as it starts (the row engine);
     - ``order``: the last write comes only D clocks after a start; ``drain``: D clocks after
-      each start, it comes. So each row started is written once, in order, and never late.
+      each start, it comes. So each item started is written once, in order, and never late.
 
-    The invariants: the schedule's phase bits are the starts delayed."""
-    ins = {k: (getattr(part.i, k).shape()) for k in part.rows}
-    W = sum(s.width for s in ins.values())
-    D, C, pre = part.offset, COUNT, _phases(part)
-    at, conn = 0, []
-    for k, s in ins.items():
-        conn.append(f".i__{k}(free[{at + s.width - 1}:{at}])")
-        at += s.width
-    L = ["`default_nettype none", "module formal_top(input wire clk);",
-         "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;", "  wire rst = init;",
-         "  (* anyseq *) reg i_valid, space, stop;", f"  (* anyseq *) reg [{W - 1}:0] free;",
-         "  wire i_ready, started, d_written, busy, early_en;",
-         f"  reg [{W - 1}:0] past_in;", "  reg past_istall = 1'b0, dead = 1'b0, used = 1'b0;",
-         "  always @(posedge clk) begin past_istall <= ~rst & i_valid & ~i_ready; "
-         "past_in <= free; end",
-         "  always @* if (past_istall) in_held: assume(i_valid && free == past_in);",
-         "  always @(posedge clk) if (stop) dead <= 1'b1;"]
+    The invariants: the schedule's phase bits are the starts delayed; its slot counts are
+    the clocks since the last start modulo ``ii``; ``aligned`` and ``inflight`` follow."""
+    conn, W = _engine_ports(part)
+    D, C, ii, L = part.offset, COUNT, part.ii, part.length
+    H = max(D, L - 1)                              # the starts remembered
+    early = "early" in part.memories
+    L_ = ["`default_nettype none", "module formal_top(input wire clk);",
+          "  reg init = 1'b1;", "  always @(posedge clk) init <= 1'b0;", "  wire rst = init;",
+          "  (* anyseq *) reg i_valid, space, stop;", f"  (* anyseq *) reg [{W - 1}:0] free;",
+          "  wire i_ready, started, d_written, busy" + (", early_en;" if early else ";"),
+          f"  reg [{W - 1}:0] past_in;", "  reg past_istall = 1'b0, dead = 1'b0, used = 1'b0;",
+          "  always @(posedge clk) begin past_istall <= ~rst & i_valid & ~i_ready; "
+          "past_in <= free; end",
+          "  always @* if (past_istall) in_held: assume(i_valid && free == past_in);",
+          "  always @(posedge clk) if (stop) dead <= 1'b1;"]
     # the mutants: the engine sees the queue's space high once stopped (overrun); a last
     # write left out, or one added, once
     dut_space = "space | dead" if mutant == "overrun" else "space"
-    L += [f"  {module} dut (.clk(clk), .rst(rst), .i__valid(i_valid), .i__ready(i_ready), "
-          + ", ".join(conn) + f", .space({dut_space}), .started(started), "
-          ".written(d_written), .busy(busy), .early__en(early_en));"]
+    slotted = getattr(part, "offsets", {})        # the setup's memories, written at a slot
+    conn += [f".{g}__en({g}_en), .{g}__addr({g}_addr)" for g in slotted]
+    L_ += [f"  wire {g}_en; wire [3:0] {g}_addr;" for g in slotted]
+    if mutant == "wrong_slot":                    # the harness sees the first memory's
+        g = next(iter(slotted))                   # write once at the slot after its own
+        conn[-len(slotted)] = f".{g}__en({g}_en), .{g}__addr({g}_addr_d)"
+        L_ += [f"  wire [3:0] {g}_addr_d; wire now = stop & ~used & {g}_en;",
+               "  always @(posedge clk) if (now) used <= 1'b1;",
+               f"  assign {g}_addr = {g}_addr_d + now;"]
+    L_ += [f"  {module} dut (.clk(clk), .rst(rst), .i__valid(i_valid), .i__ready(i_ready), "
+           + ", ".join(conn) + f", .space({dut_space}), .started(started), "
+           ".written(d_written), .busy(busy)" + (", .early__en(early_en));" if early else ");")]
     if mutant == "lost_write":
-        L += ["  wire now = stop & ~used & d_written;",
-              "  always @(posedge clk) if (now) used <= 1'b1;",
-              "  wire written = d_written & ~now;"]
+        L_ += ["  wire now = stop & ~used & d_written;",
+               "  always @(posedge clk) if (now) used <= 1'b1;",
+               "  wire written = d_written & ~now;"]
     elif mutant == "extra_write":
-        L += ["  wire now = stop & ~used & ~d_written;",
-              "  always @(posedge clk) if (now) used <= 1'b1;",
-              "  wire written = d_written | now;"]
-    elif mutant in (None, "overrun"):
-        L += ["  wire written = d_written;"]
+        L_ += ["  wire now = stop & ~used & ~d_written;",
+               "  always @(posedge clk) if (now) used <= 1'b1;",
+               "  wire written = d_written | now;"]
+    elif mutant in (None, "overrun", "wrong_slot"):
+        L_ += ["  wire written = d_written;"]
     else:
-        raise ValueError(f"the row engine has no mutant {mutant!r}")
-    L += [f"  reg [{D}:1] dl = 0;",
-          f"  always @(posedge clk) dl <= rst ? {D}'d0 : "
-          + (f"{{dl[{D - 1}:1], started}};" if D > 1 else "started;"),
-          f"  reg [{C - 1}:0] n_w = 0;",
-          "  always @(posedge clk) if (!rst) n_w <= n_w + written;",
-          "  always @* if (!rst) begin",
-          "    handshake: assert(started == (i_valid && i_ready));",
-          "    if (started) credit: assert(space);",
-          "    early: assert(early_en == started);",
-          f"    if (written) order: assert(dl[{D}]);",
-          f"    if (dl[{D}]) drain: assert(written);",
-          "    c_two: cover(written && n_w == 1);",
-          "    c_stall: cover(i_valid && !i_ready && space);",
-          "  end"]
-    ph, sel = _engine_state(part)
-    L += [f"  (* keep *) wire s_ph{k};" for k in ph] + [f"  (* keep *) wire s_sel{k};" for k in sel]
-    L += ["  always @* if (!rst) begin",
-          *[f"    inv_ph{k}: assert(s_ph{k} == dl[{k}]);" for k in ph],
-          # one channel (RASTER): every job is its row's only one, so the serial engine's
-          # channel select (``s_sel0``) is 1, and so is its capture at the start (read from
-          # offset 1) and its copy made at offset k (read from k + 1) while a job is past it
-          *[f"    inv_sel{k}: assert(s_sel0);" if k == 0 else
-            f"    inv_sel{k}: assert(!(|dl[{D}:{k + (k > 1)}]) || s_sel{k});" for k in sel],
-          "  end", "endmodule"]
-    return keep_only("\n".join(L) + "\n", only)
+        raise ValueError(f"the scheduled part has no mutant {mutant!r}")
+    slot = max(ii - 1, 1).bit_length()
+    L_ += [f"  reg [{H}:1] dl = 0;",
+           f"  always @(posedge clk) dl <= rst ? {H}'d0 : "
+           + (f"{{dl[{H - 1}:1], started}};" if H > 1 else "started;"),
+           f"  reg [{C - 1}:0] n_w = 0;", f"  reg [{slot - 1}:0] since = 0;",
+           "  always @(posedge clk) if (!rst) n_w <= n_w + written;",
+           # a job's slot: the starts before it, modulo the queue's 16 words; the job at
+           # offset k started k clocks ago, after n_s less the starts in dl[k:1]
+           f"  reg [{C - 1}:0] n_s = 0;",
+           "  always @(posedge clk) if (!rst) n_s <= n_s + started;",
+           # (cum<k>: the starts in dl[k:1]; tag<k>: the slot of the job at offset k)
+           "  wire [3:0] cum0 = 4'd0;",
+           *[f"  wire [3:0] cum{k} = cum{k - 1} + dl[{k}], tag{k} = n_s[3:0] - cum{k};"
+             for k in range(1, H + 1)],
+           # the clocks since the last start (since reset before any), modulo ii
+           f"  always @(posedge clk) since <= rst ? 0 : started ? {1 % ii} : "
+           f"since == {ii - 1} ? 0 : since + 1;",
+           "  always @* if (!rst) begin",
+           "    handshake: assert(started == (i_valid && i_ready));",
+           "    if (started) credit: assert(space);",
+           *([f"    if (started) interval: assert({_latest(0, ii, L, H)});"] if ii > 1 else []),
+           *(["    early: assert(early_en == started);"] if early else []),
+           f"    if (written) order: assert(dl[{D}]);",
+           f"    if (dl[{D}]) drain: assert(written);",
+           # every memory is written exactly at its offset, at its job's slot
+           *[f"    slot_{g}: assert({g}_en == dl[{k}] && (!{g}_en || {g}_addr == tag{k}));"
+             for g, k in slotted.items()],
+           "    c_two: cover(written && n_w == 1);",
+           "    c_stall: cover(i_valid && !i_ready && space);",
+           "  end"]
+    ph, sel, counts = _engine_state(part)
+    copies = _slot_copies(part)
+    L_ += [f"  (* keep *) wire s_ph{k};" for k in ph] + [f"  (* keep *) wire s_sel{k};" for k in sel]
+    L_ += ["  (* keep *) wire [3:0] s_slots;"] if slotted else []
+    L_ += [f"  (* keep *) wire [3:0] s_slot_at{c};" for c in copies]
+    L_ += [f"  (* keep *) wire [{slot - 1}:0] s_slot{n};" for n in range(counts)]
+    L_ += [f"  (* keep *) wire s_aligned{n};" for n in range(counts)]
+    L_ += ["  (* keep *) wire s_inflight;"] if counts else []
+    L_ += ["  always @* if (!rst) begin",
+           *[f"    inv_ph{k}: assert(s_ph{k} == dl[{k}]);" for k in ph],
+           # one channel (RASTER): every job is its row's only one, so the serial engine's
+           # channel select (``s_sel0``) is 1, and so is its capture at the start (read from
+           # offset 1) and its copy made at offset k (read from k + 1) while a job is past it
+           *[f"    inv_sel{k}: assert(s_sel0);" if k == 0 else
+             f"    inv_sel{k}: assert(!(|dl[{D}:{k + (k > 1)}]) || s_sel{k});" for k in sel],
+           # ``Schedule._align``: aligned next clock when the slot count is 0 or no job is
+           # in flight (none started at 1 .. length - 1 clocks ago)
+           *([f"    inv_since: assert(since < {ii});"] if counts else []),
+           # the starts remembered keep the interval (``interval`` at each start)
+           *[f"    inv_gap{j}: assert(!dl[{j}] || {_latest(j, ii, L, H)});"
+             for j in range(1, H) if counts],
+           # the clocks since the last start, where it is still remembered
+           *[f"    inv_since{j}: assert(!dl[{j}] || " + (f"|dl[{j - 1}:1] || " if j > 1 else "")
+             + f"since == {j % ii});" for j in range(1, H + 1) if counts],
+           *[f"    inv_slot{n}: assert(s_slot{n} == since);" for n in range(counts)],
+           *[f"    inv_aligned{n}: assert(s_aligned{n} == (since == 0 || !(|dl[{L - 1}:1])));"
+             for n in range(counts)],
+           *([f"    inv_inflight: assert(s_inflight == |dl[{L - 2}:1]);"] if counts else []),
+           # the setup's slot count, and each copy of a job's slot, written at offset c and
+           # read at c + 1 .. c + ii, holds the slot of the job there
+           *(["    inv_slots: assert(s_slots == n_s[3:0]);"] if slotted else []),
+           *[f"    inv_slot_at{c}_{k}: assert(!dl[{k}] || s_slot_at{c} == tag{k});"
+             for c in copies for k in range(c + 1, min(c + ii, H) + 1)],
+           "  end", "endmodule"]
+    return keep_only("\n".join(L_) + "\n", only)
+
+
+def _latest(j, ii, L, H):
+    """Verilog: of the starts in ``dl`` older than position ``j``, the newest is a multiple
+    of ``ii`` clocks before it, or more than ``L - 1`` (no job of it still in flight)."""
+    terms = [f"!(dl[{j + d}]" + (f" && !(|dl[{j + d - 1}:{j + 1}])" if d > 1 else "") + ")"
+             for d in range(1, L) if d % ii and j + d <= H]
+    return " && ".join(terms) or "1"
 
 
 def _engine_state(part):
-    """The offsets of the row engine's phase bits up to its write's, and of the serial
-    engine's channel select (0), its capture (1) and its late copies."""
-    pre, text = _phases(part), export(part, "f_row_engine")
-    ph = [k for k in range(1, part.offset + 1) if re.search(rf"\b{pre}_ph{k}\b", text)]
+    """The offsets of the scheduled part's phase bits up to its write's, of the serial
+    engine's channel select (0), its capture (1) and its late copies, and how many slot
+    counts (``aligned`` and its copies) its schedule keeps."""
+    pre, text = _phases(part), export(part, _module(part))
+    ph = [k for k in range(1, max(part.offset, part.length - 1) + 1)
+          if re.search(rf"\b{pre}_ph{k}\b", text)]
     sel = sorted({int(k) for k in re.findall(r"\brs_sel_at(\d+)\b", text)})
     if sel:                                      # the select, and its capture at the start
         assert RASTER["channels"] == 1
         sel = [0, 1, *sel]
-    return ph, sel
+    # the slot count behind ``aligned`` (the start's): its copies drive only input captures,
+    # which no property reads (products are free), so the solver's model drops them
+    counts = min(1, len(set(re.findall(rf"\b{pre}_slot(\d+)\b", text))))
+    return ph, sel, counts
+
+
+def _slot_copies(part):
+    """The offsets at which the overlapped setup writes its copies of a job's slot (0: the
+    capture at the start, ``su_sq_slot``), or none for a row engine."""
+    if not hasattr(part, "offsets"):
+        return []
+    text = export(part, _module(part))
+    return [0, *sorted({int(c) for c in re.findall(r"\bsu_sq_slot_at(\d+)\b", text)})]
 
 
 def row_engine_wires(part):
     pre = _phases(part)
-    ph, sel = _engine_state(part)
+    ph, sel, counts = _engine_state(part)
+    copies = _slot_copies(part)
+    slots = ([("s_slots", "sq_slots")] + [(f"s_slot_at{c}", f"su_sq_slot_at{c}" if c else
+                                           "su_sq_slot") for c in copies]) if copies else []
     names = {0: "rs_sel0", 1: "rs_sel"}
     return ([(f"s_ph{k}", f"{pre}_ph{k}") for k in ph]
-            + [(f"s_sel{k}", names.get(k, f"rs_sel_at{k}")) for k in sel])
+            + [(f"s_sel{k}", names.get(k, f"rs_sel_at{k}")) for k in sel]
+            + [(f"s_slot{n}", f"{pre}_slot{n}") for n in range(counts)]
+            + [(f"s_aligned{n}", f"{pre}_aligned{n or ''}") for n in range(counts)]
+            + ([("s_inflight", f"{pre}_inflight")] if counts else []) + slots)
 
 
 ENGINE = ("lost_write", "extra_write", "overrun")
@@ -812,18 +924,21 @@ PARTS = {
     "row_engine": (row_engine, row_engine_harness, row_engine_wires, ENGINE),
     "row_engine_serial": (lambda: row_engine(serial=True), row_engine_harness,
                           row_engine_wires, ENGINE),
+    "setup_schedule": (setup_schedule, row_engine_harness, row_engine_wires,
+                       (*ENGINE, "wrong_slot")),
 }
 
 
-def sby_text(module, mode, depth, wires=(), cut=False):
-    """The SymbiYosys job: the design flattened, for the invariants its memories mapped to
-    registers and their wires connected (a mutant's BMC asserts none of them, and the signals they
-    read may be optimised away); ``cut``: each product a free value."""
+def sby_text(module, mode, depth, wires=(), cut=False, mapped=True):
+    """The SymbiYosys job: the design flattened, for the invariants their wires connected and,
+    where they read memories (``mapped``), its memories mapped to registers (a mutant's BMC
+    asserts none of them, and the signals they read may be optimised away); ``cut``: each
+    product a free value."""
     return "\n".join([
         "[options]", f"mode {mode}", f"depth {depth}", "multiclock off", "",
         "[engines]", "smtbmc yices", "",
         "[script]", "read_verilog -formal harness.v", f"read_verilog {module}.v",
-        "hierarchy -top formal_top", "proc", "flatten", *(("memory_map",) if wires else ()),
+        "hierarchy -top formal_top", "proc", "flatten", *(("memory_map",) if wires and mapped else ()),
         *(("cutpoint t:$mul",) if cut else ()),
         "opt_clean",
         "cd formal_top", *[f"connect -set {w} dut.{n}" for w, n in wires], "cd ..",
@@ -843,15 +958,18 @@ def run(name, check, mutant=None, timeout=None, part=None):
         mode, only = "bmc", (MUTANTS[mutant][1],)
         depth = (part.depth + 4 if mutant == "overrun" and hasattr(part, "depth") else
                  SCHEDULED[name](part) + 5 if name in SCHEDULED else MUTANT_DEPTH)
-    elif mode == "cover":                  # a scheduled part: two items through
-        depth = 2 * (SCHEDULED[name](part) + 2) if name in SCHEDULED else COVER_DEPTH
+    elif mode == "cover":                  # a scheduled part: two items through (an
+        #                                    interval apart, where it has one)
+        depth = (COVER_DEPTH if name not in SCHEDULED else
+                 part.offset + part.ii + 2 if getattr(part, "ii", None) else
+                 2 * (SCHEDULED[name](part) + 2))
     tag = name + (f"_{mutant}" if mutant else "") + f"_{check}"
     work = OUT / tag
     module = f"f_{name}"
     status, failed, seconds = run_sby(work, {
         f"{module}.v": export(part, module), "harness.v": harness(part, module, mutant, only),
         "job.sby": sby_text(module, mode, depth, () if mutant else wires(part),
-                            cut=name in SCHEDULED)},
+                            cut=name in SCHEDULED, mapped=harness is not row_engine_harness)},
         mode, timeout)
     out = {"target": name, "check": mode if mutant else check, "mutant": mutant,
            "status": status,

@@ -10,9 +10,11 @@ next value beside it (``o_valid_next``: the walker loads a clock early). Two for
   register. With ``setup_serial`` the channels' jobs (``channel_engine``) follow the
   schedule on its first multiplier and write their constants into a memory of two slots
   (``consts``, read at ``consts_index`` and the slot the walker holds).
-- **Overlapped** (``setup_ii``): a triangle every ``setup_ii`` clocks while the setup queue
-  promises a slot (``setup_queue``, a :class:`Queue`); the walker's constants are read in
-  place at the slot last taken (``current``).
+- **Overlapped** (``setup_ii``): the schedule (:class:`SetupSchedule`) takes a triangle every
+  ``setup_ii`` clocks while the setup queue (a :class:`Queue`) promises a slot, and writes
+  it into the queue's memories; the two are joined by the credit, as the row engine and the
+  row queue are, and each is proven alone (flows/parts.py). The walker's constants are read
+  in place at the slot last taken (``current``).
 
 The fields' shapes and the setup's clocks come from a build of the same schedule on its own
 (``_form``), before the component's signature is stated, so they are the elaborated ones.
@@ -31,7 +33,9 @@ from .queue import Queue
 from .span import split_fields, turns
 from .walker import walker_constants, walker_inputs
 
-__all__ = ["SetupEngine", "channel_engine", "setup_queue"]
+__all__ = ["SetupEngine", "SetupSchedule", "SETUP_QUEUE", "channel_engine", "queue_writes"]
+
+SETUP_QUEUE = 15         # triangles the setup queue holds: all but its current slot
 
 
 class SetupEngine(wiring.Component):
@@ -74,7 +78,7 @@ class SetupEngine(wiring.Component):
 @functools.lru_cache(maxsize=None)
 def _form_cached(plan, layout_items, flat):
     m = Module()
-    i = stream.Signature(data.StructLayout(dict(layout_items))).create()
+    i = stream.Signature(data.StructLayout(dict(layout_items))).flip().create()   # an input
     index = Signal(8)
     out = _build(m, plan, i, Signal(), flat, None, index)
     Fragment.get(m, None)                  # (its ROMs are used, for Amaranth's checks)
@@ -93,38 +97,32 @@ def _build(m, plan, i, ready, flat, platform, consts_index):
     """The setup into ``m``: triangles from the stream ``i``, ``ready`` the walker's. Returns
     its outputs: ``fields`` (what the walker reads), ``valid_next``, ``busy``, ``end``, and
     ``current`` and ``consts`` (with ``index_bits``) when its form has them, else None."""
-    setup, ch = plan.setup, len(plan.channels)
-    count = Signal(32, name="su_tri")                   # the triangle's index, ``tri``
-    with m.If(i.valid & i.ready):
-        m.d.sync += count.eq(count + 1)
-    inputs = {**{k: i.payload[k] for k, _ in i.payload.shape()}, "tri": count}
-    ii = plan.setup_ii or None
+    ch, ii = len(plan.channels), plan.setup_ii
     # one triangle at a time, the setup's product copies keep their own registers: shared,
     # they saved 2.7k FF of the default raster's 15.5k, but a shared register feeds every
     # member's reader, and the routes from two of them set the clock (107.4, 110.9 and,
     # with alpha's saturation split, 118.9 MHz placed, against 134.3 and 133.6 unshared)
-    sc = Schedule(m, "su", Const(1), ii=ii, mults=plan.setup_mults, mux_groups=8,
-                  platform=platform, narrow=plan.setup_narrow, share=bool(ii))
     out = {"current": None, "consts": None, "index_bits": 0}
     if ii:
-        # overlapped: a triangle every ii clocks while the queue promises a slot; ready,
-        # the start and the input captures from registers (copies of ``aligned``)
-        space = Signal(name="sq_space", init=1)
-        m.d.comb += [sc.start.eq(i.valid & sc.aligned & space),
-                     i.ready.eq(sc.aligned & space)]
-        v = sc.inputs(inputs, copy=sc.aligned_copy)
-        coef = setup.program(sc, v)
-        coef.update({k: v[k] for k in flat})
-        current = walker_constants(ch, flat)
-        coef, sq, end = setup_queue(m, sc, coef, current)
-        sc.finish()
-        sc.check()
-        m.d.comb += [space.eq(sq.space), sq.o.ready.eq(ready)]
-        out.update(valid_next=sq.o_valid_next, busy=sq.pending, end=end,
-                   current={k: coef[k] for k in current})
+        # overlapped: the schedule (``SetupSchedule``) writes each triangle into the setup
+        # queue, joined as the row engine and the row queue are
+        m.submodules.schedule = ss = SetupSchedule(plan, i.payload.shape(), flat)
+        m.submodules.setup_queue = sq = Queue(ss.memories, SETUP_QUEUE, name="sq")
+        wiring.connect(m, wiring.flipped(i), ss.i)
+        m.d.comb += [sq.start.eq(ss.started), sq.written.eq(ss.written), ss.space.eq(sq.space),
+                     sq.o.ready.eq(ready)]
+        for name in ss.memories:
+            wiring.connect(m, getattr(ss, name), getattr(sq, name))
+        coef = {k: Const(*c) for k, c in ss.consts.items()}
+        coef.update({k: sq.o.payload[k] for k, _ in sq.o.payload.shape()})
+        coef.update({k: sq.current[k] for k, _ in sq.current.shape()})
+        out.update(valid_next=sq.o_valid_next, busy=sq.pending, end=ss.offset,
+                   current={k: coef[k] for k in walker_constants(ch, flat)})
     else:
-        coef, valid_next, busy, end, consts = _one_at_a_time(m, plan, sc, i, inputs, ready,
-                                                             flat, platform)
+        sc = Schedule(m, "su", Const(1), mults=plan.setup_mults, mux_groups=8,
+                      platform=platform, narrow=plan.setup_narrow, share=False)
+        coef, valid_next, busy, end, consts = _one_at_a_time(m, plan, sc, i, _inputs(m, i),
+                                                             ready, flat, platform)
         out.update(valid_next=valid_next, busy=busy, end=end)
         if consts:
             mem, bits = consts
@@ -133,6 +131,80 @@ def _build(m, plan, i, ready, flat, platform, consts_index):
     out["fields"] = walker_inputs(coef, ch, flat, out["consts"] is not None,
                                   out["current"] is not None)
     return out
+
+
+def _inputs(m, i):
+    """The setup's inputs: the triangle's fields and its index (``tri``, a count)."""
+    count = Signal(32, name="su_tri")
+    with m.If(i.valid & i.ready):
+        m.d.sync += count.eq(count + 1)
+    return {**{k: i.payload[k] for k, _ in i.payload.shape()}, "tri": count}
+
+
+class SetupSchedule(wiring.Component):
+    """The overlapped setup (``setup_ii``): a triangle every ``setup_ii`` clocks while the
+    setup queue promises a slot (``space``), each written into the queue's memories at fixed
+    offsets from its start (:func:`queue_writes`): the setup queue's producer, as the row
+    engine is the row queue's, with the same ports (``started``, ``written``, a port per
+    memory). It never stalls, and its ready, start and input captures come from registers
+    (copies of ``aligned``). ``consts``: the results that are constants (``{name: (value,
+    shape)}``), not written."""
+
+    def __init__(self, plan, layout, flat=()):
+        self.plan, self.layout, self.flat = plan, layout, tuple(flat)
+        # its memories, constants, each memory's write offset, its length; a triangle every
+        # ``ii``
+        self.memories, self.consts, self.offsets, self.length = _schedule_form(
+            plan, tuple((k, f.shape) for k, f in layout), self.flat)
+        self.offset = max(self.offsets.values())         # the last write: ``written``
+        self.ii = plan.setup_ii
+        members = {"i": In(stream.Signature(layout)), "space": In(1), "started": Out(1),
+                   "written": Out(1), "busy": Out(1)}
+        for name, (fields, _, _) in self.memories.items():
+            members[name] = Out(wiring.Signature({"en": Out(1), "addr": Out(4),
+                                                  "data": Out(data.StructLayout(fields))}))
+        super().__init__(members)
+
+    def elaborate(self, platform):
+        m = Module()
+        writes, _, sc, _ = _schedule(m, self.plan, self.i, self.space, self.flat, platform)
+        for name, vals, en, addr, _, _ in writes:
+            port = getattr(self, name)
+            m.d.comb += [port.en.eq(en), port.addr.eq(addr),
+                         *[port.data[k].eq(x) for k, x in vals.items()]]
+        m.d.comb += [self.started.eq(sc.start), self.written.eq(sc.at(self.offset)),
+                     self.busy.eq(sc.busy())]
+        return m
+
+
+def _schedule(m, plan, i, space, flat, platform):
+    """The overlapped setup's schedule into ``m``. Returns ``(writes, constants, schedule,
+    last write's offset)``."""
+    sc = Schedule(m, "su", Const(1), ii=plan.setup_ii, mults=plan.setup_mults, mux_groups=8,
+                  platform=platform, narrow=plan.setup_narrow, share=True)
+    m.d.comb += [sc.start.eq(i.valid & sc.aligned & space), i.ready.eq(sc.aligned & space)]
+    v = sc.inputs(_inputs(m, i), copy=sc.aligned_copy)
+    coef = plan.setup.program(sc, v)
+    coef.update({k: v[k] for k in flat})
+    writes, offset = queue_writes(sc, coef, walker_constants(len(plan.channels), flat))
+    sc.finish()
+    sc.check()
+    consts = {k: (x.value, x.shape()) for k, x in coef.items() if isinstance(x, Const)}
+    return writes, consts, sc, offset
+
+
+@functools.lru_cache(maxsize=None)
+def _schedule_form(plan, layout_items, flat):
+    """The overlapped setup's memories (``{name: (fields, slotted, current)}``), its
+    constants, each memory's write offset and its length, from a build of it on its own."""
+    m = Module()
+    i = stream.Signature(data.StructLayout(dict(layout_items))).create()
+    writes, consts, sc, _ = _schedule(m, plan, i, Signal(), flat, None)
+    Fragment.get(m, None)
+    memories = {name: ({k: Value.cast(x).shape() for k, x in vals.items()}, True, now)
+                for name, vals, _, _, now, _ in writes}
+    offsets = {name: at for name, _, _, _, _, at in writes}
+    return memories, consts, offsets, sc.length
 
 
 def _one_at_a_time(m, plan, sc, i, inputs, ready, flat, platform):
@@ -246,18 +318,17 @@ def channel_engine(m, setup, src, go, wslot, rslot, platform=None, mults=1, host
     return consts, a2, last, {"ii": ii, "end": (channels - 1) * ii + end, "busy": busy}
 
 
-def setup_queue(m, sc, values, current=(), depth=15):
-    """The setup's results, a triangle's a slot of distributed RAM, between an overlapped
-    setup (``sc``, a schedule with an interval) and the walker: a :class:`Queue` whose
-    credit (``space``) the setup's start waits for, so it never stalls. The slot is counted
-    at the start and travels with the triangle (``sq_slot`` and its late copies); each value
-    is written as soon as it is ready, into one of a few memories that each take the values
-    ready within an interval of each other, so no value is kept in a copy for this.
-    ``current``: names of values read at the slot last taken (the walker's constants, read in
-    place while it walks that triangle). Returns ``(values, queue, offset)``, ``offset`` the
-    one at which the last memory is written."""
+def queue_writes(sc, values, current=()):
+    """An overlapped setup's results (``values``, of the schedule ``sc``) as the setup queue's
+    writes: the triangle's slot is counted at the start and travels with it (``sq_slot``
+    and its late copies); each value is written as soon as it is ready, into one of a few
+    memories that each take the values ready within an interval of each other, so no value
+    is kept in a copy for this. ``current``: names of values read at the slot last taken
+    (the walker's constants, read in place while it walks that triangle); constants are not
+    written. Returns ``(writes, offset)``: ``(memory, values, enable, slot, current,
+    offset)`` each, and the offset at which the last memory is written."""
     slots = Signal(4, name="sq_slots")                   # 4-bit pointers wrap at 16
-    m.d.sync += slots.eq(slots + sc.start)
+    sc.m.d.sync += slots.eq(slots + sc.start)
     slot = sc.input("sq_slot", slots)
     keep = {k: x for k, x in values.items() if not isinstance(x, Const)}
     groups = []
@@ -266,21 +337,12 @@ def setup_queue(m, sc, values, current=(), depth=15):
         if not groups or k in current and not groups[-1][2] or at >= groups[-1][0] + sc.ii:
             groups.append([at, {}, k in current])
         groups[-1][1][k] = keep[k]
-    offset, memories, writes = 0, {}, []
+    offset, writes = 0, []
     for g, (_, vals, now) in enumerate(groups):
         at = max(sc.when(x) for x in vals.values())
         offset = max(offset, at)
-        data_ = sc.late_at(Cat(*vals.values()), at)
-        sc.read(at, data_)
-        memories[f"g{g}"] = ({k: Value.cast(x).shape() for k, x in vals.items()}, True, now)
-        writes.append((f"g{g}", data_, sc.at(at), sc.late(slot, at)))
-    m.submodules.setup_queue = q = Queue(memories, depth, name="sq")
-    m.d.comb += [q.start.eq(sc.start), q.written.eq(sc.at(offset))]
-    for name, data_, en, addr in writes:
-        port = getattr(q, name)
-        m.d.comb += [port.en.eq(en), port.addr.eq(addr), port.data.eq(data_)]
-    out = {k: x for k, x in values.items() if isinstance(x, Const)}
-    out.update({k: q.o.payload[k] for k, _ in q.o.payload.shape()})
-    if current:
-        out.update({k: q.current[k] for k, _ in q.current.shape()})
-    return out, q, offset
+        late = {k: sc.late_at(x, at) for k, x in vals.items()}
+        addr = sc.late(slot, at)
+        sc.read(at, *late.values(), addr)
+        writes.append((f"g{g}", late, sc.at(at), addr, now, at))
+    return writes, offset
