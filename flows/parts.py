@@ -67,10 +67,11 @@ setup's schedule** (``SetupSchedule``, the setup queue's producer): items held u
 free credit; ``handshake`` and ``credit`` (an item starts exactly when taken, only on a
 credit), ``interval`` (while a job is in flight, only a multiple of ``ii`` after the last
 start), ``early`` (the row engine's carried values written at the start), ``order`` and
-``drain`` (its last write exactly D clocks after each start), and the setup's ``slot_g*``
-(each memory written at its offset, at its triangle's slot); the invariants tie the
-schedule's phase bits to the starts delayed, its slot count to the clocks since the last
-start, and the setup's copies of a triangle's slot to the starts counted.
+``drain`` (its last write exactly D clocks after each start), and, for the two that give
+the queue its slots (the setup and the serial row engine), ``slot_*`` (each memory written
+at its offset, at its item's slot); the invariants tie the schedule's phase bits to the
+starts delayed, its slot counts to the clocks since the last start, and the copies of an
+item's slot to the starts counted.
 
 ``python -m flows.parts [--only row_queue]``; ``make formal`` runs it too.
 """
@@ -111,7 +112,7 @@ MUTANTS = {   # name: (what it breaks, the property that must catch it)
                 "credit"),
     "lost_write": ("a row's last write into the queue is left out once", "drain"),
     "extra_write": ("a write into the queue comes with no row for it", "order"),
-    "wrong_slot": ("a write into the setup queue at the next triangle's slot, once", "slot_"),
+    "wrong_slot": ("a write into the queue at the next item's slot, once", "slot_"),
 }
 CHECKS = {"prove": ("prove", ("held", "no_extra", "order", "drain", "credit", "on_screen",
                              "rows_", "culled", "pending_", "valid_next", "handshake",
@@ -770,9 +771,11 @@ def row_engine_harness(part, module, mutant=None, only=None):
     # the mutants: the engine sees the queue's space high once stopped (overrun); a last
     # write left out, or one added, once
     dut_space = "space | dead" if mutant == "overrun" else "space"
-    slotted = getattr(part, "offsets", {})        # the setup's memories, written at a slot
-    conn += [f".{g}__en({g}_en), .{g}__addr({g}_addr)" for g in slotted]
-    L_ += [f"  wire {g}_en; wire [3:0] {g}_addr;" for g in slotted]
+    slotted = part.offsets                        # the memories written at a given slot
+    conn += [(f".{g}__en({g}_en), " if g != "early" else "") + f".{g}__addr({g}_addr)"
+             for g in slotted]
+    L_ += [(f"  wire {g}_en;" if g != "early" else "") + f" wire [3:0] {g}_addr;"
+           for g in slotted]
     if mutant == "wrong_slot":                    # the harness sees the first memory's
         g = next(iter(slotted))                   # write once at the slot after its own
         conn[-len(slotted)] = f".{g}__en({g}_en), .{g}__addr({g}_addr_d)"
@@ -805,7 +808,7 @@ def row_engine_harness(part, module, mutant=None, only=None):
            f"  reg [{C - 1}:0] n_s = 0;",
            "  always @(posedge clk) if (!rst) n_s <= n_s + started;",
            # (cum<k>: the starts in dl[k:1]; tag<k>: the slot of the job at offset k)
-           "  wire [3:0] cum0 = 4'd0;",
+           "  wire [3:0] cum0 = 4'd0, tag0 = n_s[3:0];",
            *[f"  wire [3:0] cum{k} = cum{k - 1} + dl[{k}], tag{k} = n_s[3:0] - cum{k};"
              for k in range(1, H + 1)],
            # the clocks since the last start (since reset before any), modulo ii
@@ -819,7 +822,8 @@ def row_engine_harness(part, module, mutant=None, only=None):
            f"    if (written) order: assert(dl[{D}]);",
            f"    if (dl[{D}]) drain: assert(written);",
            # every memory is written exactly at its offset, at its job's slot
-           *[f"    slot_{g}: assert({g}_en == dl[{k}] && (!{g}_en || {g}_addr == tag{k}));"
+           *[f"    slot_{g}: assert({g}_en == {f'dl[{k}]' if k else 'started'} && "
+             f"(!{g}_en || {g}_addr == tag{k}));"
              for g, k in slotted.items()],
            "    c_two: cover(written && n_w == 1);",
            "    c_stall: cover(i_valid && !i_ready && space);",
@@ -880,27 +884,33 @@ def _engine_state(part):
     if sel:                                      # the select, and its capture at the start
         assert RASTER["channels"] == 1
         sel = [0, 1, *sel]
-    # the slot count behind ``aligned`` (the start's): its copies drive only input captures,
-    # which no property reads (products are free), so the solver's model drops them
-    counts = min(1, len(set(re.findall(rf"\b{pre}_slot(\d+)\b", text))))
+    # the slot counts behind ``aligned`` and its copies (each enables a share of the input
+    # captures, among them the serial engine's slot)
+    counts = len(set(re.findall(rf"\b{pre}_slot(\d+)\b", text)))
     return ph, sel, counts
 
 
+# a slotted producer's count of the slots given (the next item's) and its job's capture of it
+SLOTS_OF = {"su": ("sq_slots", "su_sq_slot"), "rs": ("rs_next_slot", "rs_slot")}
+
+
 def _slot_copies(part):
-    """The offsets at which the overlapped setup writes its copies of a job's slot (0: the
-    capture at the start, ``su_sq_slot``), or none for a row engine."""
-    if not hasattr(part, "offsets"):
+    """The offsets at which a slotted producer writes its copies of a job's slot (0: the
+    capture at the start), or none."""
+    if not part.offsets:
         return []
+    _, capture = SLOTS_OF[_phases(part)]
     text = export(part, _module(part))
-    return [0, *sorted({int(c) for c in re.findall(r"\bsu_sq_slot_at(\d+)\b", text)})]
+    return [0, *sorted({int(c) for c in re.findall(rf"\b{capture}_at(\d+)\b", text)})]
 
 
 def row_engine_wires(part):
     pre = _phases(part)
     ph, sel, counts = _engine_state(part)
     copies = _slot_copies(part)
-    slots = ([("s_slots", "sq_slots")] + [(f"s_slot_at{c}", f"su_sq_slot_at{c}" if c else
-                                           "su_sq_slot") for c in copies]) if copies else []
+    count, capture = SLOTS_OF.get(pre, (None, None))
+    slots = ([("s_slots", count)] + [(f"s_slot_at{c}", f"{capture}_at{c}" if c else capture)
+                                     for c in copies]) if copies else []
     names = {0: "rs_sel0", 1: "rs_sel"}
     return ([(f"s_ph{k}", f"{pre}_ph{k}") for k in ph]
             + [(f"s_sel{k}", names.get(k, f"rs_sel_at{k}")) for k in sel]
@@ -923,25 +933,31 @@ PARTS = {
     "setup": (setup, setup_harness, setup_wires, STREAM),
     "row_engine": (row_engine, row_engine_harness, row_engine_wires, ENGINE),
     "row_engine_serial": (lambda: row_engine(serial=True), row_engine_harness,
-                          row_engine_wires, ENGINE),
+                          row_engine_wires, (*ENGINE, "wrong_slot")),
     "setup_schedule": (setup_schedule, row_engine_harness, row_engine_wires,
                        (*ENGINE, "wrong_slot")),
 }
 
 
-def sby_text(module, mode, depth, wires=(), cut=False, mapped=True):
-    """The SymbiYosys job: the design flattened, for the invariants their wires connected and,
-    where they read memories (``mapped``), its memories mapped to registers (a mutant's BMC
-    asserts none of them, and the signals they read may be optimised away); ``cut``: each
-    product a free value."""
+def sby_text(module, mode, depth, wires=(), cut=False, producer=False):
+    """The SymbiYosys job: the design flattened, for the invariants their wires connected and
+    its memories mapped to registers (a mutant's BMC asserts none of them, and the signals
+    they read may be optimised away); ``cut``: each product a free value. A scheduled
+    ``producer``'s invariants read no memory, and its wires are connected before
+    ``opt_clean``, which would drop those no property reads (the copies of ``aligned`` that
+    enable only input captures); the others' after it, where their names are the
+    registers'."""
+    connect = ("cd formal_top", *[f"connect -set {w} dut.{n}" for w, n in wires], "cd ..")
     return "\n".join([
         "[options]", f"mode {mode}", f"depth {depth}", "multiclock off", "",
         "[engines]", "smtbmc yices", "",
         "[script]", "read_verilog -formal harness.v", f"read_verilog {module}.v",
-        "hierarchy -top formal_top", "proc", "flatten", *(("memory_map",) if wires and mapped else ()),
+        "hierarchy -top formal_top", "proc", "flatten",
+        *(("memory_map",) if wires and not producer else ()),
         *(("cutpoint t:$mul",) if cut else ()),
+        *(connect if producer else ()),
         "opt_clean",
-        "cd formal_top", *[f"connect -set {w} dut.{n}" for w, n in wires], "cd ..",
+        *(() if producer else connect),
         "prep -top formal_top", "",
         "[files]", "harness.v", f"{module}.v", ""])
 
@@ -969,7 +985,7 @@ def run(name, check, mutant=None, timeout=None, part=None):
     status, failed, seconds = run_sby(work, {
         f"{module}.v": export(part, module), "harness.v": harness(part, module, mutant, only),
         "job.sby": sby_text(module, mode, depth, () if mutant else wires(part),
-                            cut=name in SCHEDULED, mapped=harness is not row_engine_harness)},
+                            cut=name in SCHEDULED, producer=harness is row_engine_harness)},
         mode, timeout)
     out = {"target": name, "check": mode if mutant else check, "mutant": mutant,
            "status": status,

@@ -50,6 +50,10 @@ class RowEngine(wiring.Component):
                      consts and (tuple(consts[0].items()), consts[1]))
         # its memories, its row interval and length, and its last write's offset from the start
         self.memories, self.ii, self.length, self.offset = form
+        # the memories written at the slot the engine gives (the serial engine's): what a row
+        # only carries as it starts, the rest at its last write
+        self.offsets = {name: 0 if name == "early" else self.offset
+                        for name, (_, slotted) in self.memories.items() if slotted}
         members = {"i": In(wiring.Signature({"valid": Out(1), "ready": In(1),
                                              **{k: Out(s) for k, s in self.rows.items()}})),
                    "space": In(1), "started": Out(1), "written": Out(1), "busy": Out(1)}

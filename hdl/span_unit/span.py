@@ -152,7 +152,8 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     ii = -(-(9 if quad else 4) // mults)
     sc = Schedule(m, "rs", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
     sel, index, under = turns(m, sc, "rs", channels, row_link.valid & space)   # next job's
-    slot = Signal(4, name="rs_slot")           # the row's place in the row queue (4 bits wrap)
+    slot = Signal(4, name="rs_next_slot")      # the next row's place in the row queue (4 bits
+    #                                            wrap); each job captures it as ``rs_slot``
     m.d.comb += row_link.ready.eq(sc.aligned & sel[-1] & (under | space))
     with m.If(sc.start & sel[-1]):
         m.d.sync += slot.eq(slot + 1)
