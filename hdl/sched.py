@@ -24,7 +24,7 @@ clock later.
 from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
 
 from .bram import table_slice
-from .dsp import mult18
+from .dsp import mult18, mult20
 from .term import Term, term
 
 __all__ = ["Schedule", "OPERAND", "MUL_LAT"]
@@ -76,13 +76,15 @@ class _Regs:
 
 class Schedule:
     def __init__(self, m, name, en, ii=None, mults=1, shift=None, mux_groups=None,
-                 platform=None, narrow=0, host=None, share=True):
+                 platform=None, narrow=0, host=None, share=True, narrow_bits=NARROW):
         """``shift = (amount, left)``: products asked for ``shifted`` come out as
         ``(a * b << left) >> amount``, two clocks later (one two-stage shifter per multiplier
         that has such products; ``amount`` must be steady over the job). ``platform``: the
         multipliers' blocks are instantiated with their registers on ECP5 (:mod:`hdl.dsp`).
         ``narrow``: multipliers of one 18 x 18 block each, for the products whose operands
-        fit ``NARROW`` signed bits (all of those, when there are any narrow ones).
+        fit ``narrow_bits`` signed bits (all of those, when there are any narrow ones): 18, one
+        MULT18X18D two clocks less than a wide one, or 20 (:func:`hdl.dsp.mult20`: the block
+        and its low bits' partial products in logic, as many clocks as a wide one).
         ``host``: ``(schedule, index)``, a schedule whose multiplier ``index`` is this one's
         first: this one's operands join that multiplier's multiplexer, and its products come
         from that sum register. Finish this one first; the caller keeps their products apart
@@ -99,7 +101,8 @@ class Schedule:
         self.written = _Regs()                           # register -> offset written
         self.reads = _Regs()                             # register -> last offset read
         self.mults = [[] for _ in range(mults)]          # per multiplier: (offset, a, b)
-        self.narrow = [[] for _ in range(narrow)]        # the same, 18 x 18
+        self.narrow = [[] for _ in range(narrow)]        # the same, narrow_bits square
+        self.nbits = narrow_bits
         self.fits = 0                                    # products a narrow one can take
         self.length = 1                                  # offsets used
         self.outputs = _Regs()                           # read by the next stage, not here
@@ -197,7 +200,9 @@ class Schedule:
         return {n: self._write(n, v, k) for n, v in values.items()}
 
     def mul(self, name, a, b, post=None, shape=None, after=0, shifted=False):
-        """``post(a * b)`` in a register (``a``, ``b``: signed, at most OPERAND bits)."""
+        """``post(a * b)`` in a register (``a``, ``b``: signed, at most OPERAND bits).
+        ``shifted``: True, the product shifted by the schedule's ``shift``; or a register, its
+        own amount with the schedule's ``left`` (``(a * b << left) >> amount``)."""
         # an operand with logic in it (a negation, a sum) is registered first: the operand
         # multiplexer's inputs are wiring only, so no carry chain runs into it
         a, b = (term(x) if _wiring(x) else self.let(f"{name}_{s}", x)
@@ -207,8 +212,8 @@ class Schedule:
             if len(x) + (0 if x.shape().signed else 1) > OPERAND:
                 raise ValueError(f"{self.name}.{name}: operand of {len(x)} bits")
         k = self.when(a, b, after=after)
-        fits = not shifted and all(len(x) + (0 if x.shape().signed else 1) <= NARROW
-                                   for x in (a, b))
+        fits = (shifted is not True
+                and all(len(x) + (0 if x.shape().signed else 1) <= self.nbits for x in (a, b)))
         self.fits += fits
         units = ([(True, i, u) for i, u in enumerate(self.narrow)] if fits and self.narrow
                  else [(False, i, u) for i, u in enumerate(self.mults)])
@@ -233,35 +238,35 @@ class Schedule:
             a, b = self.late_at(a, k), self.late_at(b, k)
             unit[-1] = (k, a, b)
         self.read(k, a, b)
-        if narrow:
-            total, lat = self._total(idx, True), self.lat - 2
-        else:
-            total, lat = self._total(idx), self.lat
-        if shifted:                       # the amount is read with the product's sum
-            amount = self.late(self.shift[0], k + self.lat)
-            total, lat = self._shifted(idx, amount, k + self.lat), self.lat + 2
-            self.read(k + self.lat, amount)
+        lat = self.lat - 2 if narrow and self.nbits == NARROW else self.lat
+        total = self._total(idx, narrow)
+        if shifted is not False:          # the amount is read with the product's sum
+            amount = self.late(self.shift[0] if shifted is True else shifted, k + lat)
+            total = self._shifted(idx, amount, k + lat, narrow)
+            self.read(k + lat, amount)
+            lat += 2
+            natural = len(total)                    # the product shifted left, then right
         self.length = max(self.length, k + lat + 1)
         if post:
             return self._write(name, post(total), k + lat, shape, pool=True)
         return self._write(name, total, k + lat, shape or signed(natural), pool=True)
 
-    def _shifted(self, idx, amount, at):
+    def _shifted(self, idx, amount, at, narrow=False):
         """Multiplier ``idx``'s shifter, reading ``amount`` at offset ``at`` (with ``ii``, its
         products may read it from different copies: the phase picks, see finish)."""
         if not hasattr(self, "_shifters"):
             self._shifters = {}
-        if idx not in self._shifters:
+        key = (narrow, idx)
+        if key not in self._shifters:
             left = self.shift[1]
-            total = self._total(idx)
-            coarse = Signal(signed(len(total) + left), name=f"{self.name}_m{idx}_coarse",
-                            reset_less=True)
-            reg = Signal(signed(len(total) + left), name=f"{self.name}_m{idx}_shifted",
-                         reset_less=True)
-            low = Signal(3, name=f"{self.name}_m{idx}_low", reset_less=True)
-            self._shifters[idx] = [], (total << left, coarse, low, reg)
-        self._shifters[idx][0].append((at, amount))
-        return self._shifters[idx][1][3]
+            total = self._total(idx, narrow)
+            n = f"{self.name}_{'n' if narrow else 'm'}{idx}"
+            coarse = Signal(signed(len(total) + left), name=f"{n}_coarse", reset_less=True)
+            reg = Signal(signed(len(total) + left), name=f"{n}_shifted", reset_less=True)
+            low = Signal(3, name=f"{n}_low", reset_less=True)
+            self._shifters[key] = [], (total << left, coarse, low, reg)
+        self._shifters[key][0].append((at, amount))
+        return self._shifters[key][1][3]
 
     def _build_shifters(self):
         """The shifters: two stages, by the amount's high bits, then its low ones."""
@@ -287,7 +292,7 @@ class Schedule:
         if not hasattr(self, "_totals"):
             self._totals = [Signal(signed(2 * OPERAND), name=f"{self.name}_m{n}_sum",
                                    reset_less=True) for n in range(len(self.mults))]
-            self._ntotals = [Signal(signed(2 * NARROW), name=f"{self.name}_n{n}_p")
+            self._ntotals = [Signal(signed(2 * self.nbits), name=f"{self.name}_n{n}_p")
                              for n in range(len(self.narrow))]
         return (self._ntotals if narrow else self._totals)[idx]
 
@@ -491,7 +496,7 @@ class Schedule:
         (concatenated: they do not overlap), then one addition. A narrow one: one block, its
         operands and product registered in it."""
         for narrow, units in ((False, self.mults), (True, self.narrow)):
-            bits = NARROW if narrow else OPERAND
+            bits = self.nbits if narrow else OPERAND
             for idx, unit in enumerate(units):
                 guests = [] if narrow else self.guests.get(idx, [])
                 if not unit and not guests:
@@ -512,7 +517,8 @@ class Schedule:
                 rb = Signal(signed(bits), name=f"{n}_b")
                 self.m.d.comb += [ra.eq(opa), rb.eq(opb)]
                 if narrow:
-                    p = mult18(self.m, f"{n}_x", ra, rb, self.en, self.platform)
+                    mult = mult18 if self.nbits == NARROW else mult20
+                    p = mult(self.m, f"{n}_x", ra, rb, self.en, self.platform)
                     self.m.d.comb += self._total(idx, True).eq(p)
                     continue
                 lo = OPERAND - 18

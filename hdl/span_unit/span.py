@@ -15,7 +15,7 @@ from ..sched import OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
 
-__all__ = ["plan_row_engine", "row_engine", "row_engine_serial", "row_products",
+__all__ = ["narrow_left", "plan_row_engine", "row_engine", "row_engine_serial", "row_products",
            "split_fields", "turns"]
 
 
@@ -30,7 +30,7 @@ def plan_row_engine(m, plan, w, rows, row_link, space, platform=None, flat=(), c
 
 
 def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None,
-               consts=None, precision=None):
+               consts=None, precision=None, narrow=None):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
@@ -38,7 +38,9 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     Phi = f + u d + v e and d = P0). The engine never stalls: a row starts only when
     ``space`` (a register of the row queue) promises a place for it. ``precision``: each
     channel's fraction bits out; its Phi, d and 2A go into the queue floored to ``w.fi`` of
-    it. Returns what :func:`row_engine_serial` returns: the writes into the row queue
+    it. ``narrow``: mantissa bits M (at most 20), every product narrow (:func:`narrow_left`;
+    the constants are then the setup's mantissas and shifts). Returns what
+    :func:`row_engine_serial` returns: the writes into the row queue
     (``late``, the row values computed, and ``early``, what the engine only carries, taken at
     the row's start), the row's start, its last write and the timing. ``consts`` is the
     serial engine's (the setup's channels in turn need it), so none here."""
@@ -49,7 +51,11 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     mults = mults or channels + 1
     ii = -(-row_products(modes) // mults)
     out_valid = Signal(name="re_out_valid")
-    sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
+    if narrow:
+        sc = Schedule(m, "re", Const(1), ii=ii, mults=0, narrow=mults, narrow_bits=narrow,
+                      mux_groups=8, platform=platform, shift=(None, narrow_left(w, narrow)))
+    else:
+        sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
                  row_link.ready.eq(sc.aligned & space)]
     # what passes through unchanged (the row, the triangle's index and flat words, 2A, a
@@ -86,13 +92,16 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     # the inputs are captured at every slot a job may start in (``aligned``, not the start:
     # safe, since no job reads an input more than ``ii`` clocks after its start), from copies
     v = sc.inputs({k: x for k, x in rows.items() if k not in carried}, copy=sc.aligned_copy)
-    u, vv = _uv(sc, w, v)
+    u, vv = _uv_narrow(sc, w, v, narrow) if narrow else _uv(sc, w, v)
     fq = lambda x: x[:OPERAND].as_signed()
     FP = w.FO + w.FQ                                     # fraction bits of coefficient x u
     out = {}
     for ch, mode in enumerate(modes):
-        c = {k: v.get(f"c{ch}_{k}") for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")}
-        if mode == "linear":           # t1 = d, t2 = e at FT fraction bits: a shift, no sum
+        c = {k: v.get(f"c{ch}_{k}") for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0",
+                                              "sphi", "sd")}
+        if narrow:
+            uvt, puv = _channel_narrow(sc, narrow, ch, mode, c, u, vv)
+        elif mode == "linear":           # t1 = d, t2 = e at FT fraction bits: a shift, no sum
             t1, t2 = (c[k] >> (w.FO - w.FT) for k in "de")
         else:
             au, cv, bv = sc.mul(f"au{ch}", c["a"], u), sc.mul(f"cv{ch}", c["c"], vv), \
@@ -103,14 +112,15 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
                           c["d"], acv)
             t2 = sc.apply(f"t2_{ch}", lambda e, x: fq(((e << w.FQ) + x) >> (FP - w.FT)),
                           c["e"], bv)
-        ut, vt = sc.mul(f"ut{ch}", u, t1), sc.mul(f"vt{ch}", vv, t2)
-        shift = w.FQ + w.FT - w.FI
-        uvt = sc.let(f"uvt{ch}", (ut + vt) >> shift)
+        if not narrow:
+            ut, vt = sc.mul(f"ut{ch}", u, t1), sc.mul(f"vt{ch}", vv, t2)
+            uvt = sc.let(f"uvt{ch}", (ut + vt) >> (w.FQ + w.FT - w.FI))
+            if mode != "linear":
+                puv = sc.let(f"puv{ch}", (pu + pv) >> (FP - w.FI))
         if mode == "linear":          # d = P0: carried (``early``)
             k = sc.when(uvt)
             end_vals = read_at(ch, k)
         else:
-            puv = sc.let(f"puv{ch}", (pu + pv) >> (FP - w.FI))
             k = sc.when(uvt, puv)
             end_vals = read_at(ch, k)
             out[f"d{ch}"] = sc.let(f"d{ch}", term(end_vals["p0"]) + puv, after=k)
@@ -216,20 +226,76 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     return writes, started, last, timing
 
 
-def _uv(sc, w, v):
+def _start(sc, w, v):
     """A row's start in a row-engine schedule: the span clamped to the screen (``xs``,
-    ``xe`` into ``v``), the numerator track it starts on (column 0 when the left edge is off
-    screen), and u = nu r / 2**sh, v likewise (eq 18-20). Returns (u, v)."""
+    ``xe`` into ``v``) and the numerator track it starts on (column 0 when the left edge is
+    off screen), ``nu``, ``nv`` into ``v``."""
     size = 1 << w.screen_bits
     clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
     border = v["xl"] < 0                          # the span starts at column 0: its track
     num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
            for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
     v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), **num))
+
+
+def _uv(sc, w, v):
+    """:func:`_start`, then u = nu r / 2**sh, v likewise (eq 18-20). Returns (u, v)."""
+    _start(sc, w, v)
     sc.shift = (v["sh"], w.FQ - w.R)
     fq = lambda x: x[:OPERAND].as_signed()
     return (sc.mul("u", v["nu"], v["rs"], post=fq, shifted=True),
             sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True))
+
+
+def narrow_left(w, M):
+    """The narrow engine's left shift L: each product of M-bit mantissas is summed into FI as
+    ``(p << L) >> amount``; L = FI - 2 M + 11 (at least 0) keeps every amount >= 0 for
+    exponents up to 6 (a..e, |x| < 64) and 7 (Pu, Pv): see :func:`_channel_narrow`."""
+    return max(w.FI - 2 * M + 11, 0)
+
+
+def _uv_narrow(sc, w, v, M):
+    """:func:`_start`, then (u, v) as M-bit mantissas with M - 2 fraction bits (in [0, 1] at
+    a span's first pixel, eq 18-20): nu 2**(M-2-sh) floored (|nu| < 2**(sh+1) there), in two
+    shifts, each a clock; times ``rs`` (the setup's M-bit 2**(M-2+sh) / Omega, rounded),
+    rounded to M - 2 fraction bits. Off by at most 5 r, r = 2**-(M-1): the floor 2 r, the
+    reciprocal's rounding 2 r, the product's r (docs/quadratic.md)."""
+    _start(sc, w, v)
+    coarse = sc.lets(**{f"{a}_hi": (v[f"n{a}"] << (M - 2)) >> Cat(Const(0, 3), v["sh"][3:])
+                        for a in "uv"})
+    mant = sc.lets(**{f"{a}_m": (coarse[f"{a}_hi"] >> v["sh"][:3])[:M].as_signed()
+                      for a in "uv"})
+    post = lambda p: ((p + (1 << (M - 3))) >> (M - 2))[:M].as_signed()
+    return (sc.mul("u", mant["u_m"], v["rs"], post=post),
+            sc.mul("v", mant["v_m"], v["rs"], post=post))
+
+
+def _channel_narrow(sc, M, ch, mode, c, u, v):
+    """One channel's products on M-bit mantissas (block floating point, issue 49): a..e
+    share the channel's exponent e0 on the triangle, Pu and Pv its exponent e1; u, v have
+    M - 2 fraction bits. t1 = d + a u + c v and t2 = e + b v (eq 17) are exact sums, then
+    rounded to M bits at exponent e0 + 2 (|t1| < 3 2**e0); u t1 + v t2 and Pu u + Pv v go
+    into FI through the multipliers' shifters by the setup's amounts (``sphi``: L - (FI -
+    2 M + 5 + e0), or + 3 for a linear channel, whose t1, t2 are d, e; ``sd``: L - (FI - 2 M
+    + 3 + e1)), floored there. Returns (u t1 + v t2, Pu u + Pv v) at FI (None for a linear
+    channel's second)."""
+    if mode == "linear":
+        t1, t2 = c["d"], c["e"]
+    else:
+        au, cv, bv = sc.mul(f"au{ch}", c["a"], u), sc.mul(f"cv{ch}", c["c"], v), \
+            sc.mul(f"bv{ch}", c["b"], v)
+        rnd = lambda x: ((x + (1 << (M - 1))) >> M)[:M].as_signed()
+        acv = sc.let(f"acv{ch}", au + cv)
+        t1 = sc.apply(f"t1_{ch}", lambda d, x: rnd((d << (M - 2)) + x), c["d"], acv)
+        t2 = sc.apply(f"t2_{ch}", lambda e, x: rnd((e << (M - 2)) + x), c["e"], bv)
+    ut = sc.mul(f"ut{ch}", u, t1, shifted=c["sphi"])
+    vt = sc.mul(f"vt{ch}", v, t2, shifted=c["sphi"])
+    uvt = sc.let(f"uvt{ch}", ut + vt)
+    if mode == "linear":
+        return uvt, None
+    pu = sc.mul(f"pu{ch}", c["pu"], u, shifted=c["sd"])
+    pv = sc.mul(f"pv{ch}", c["pv"], v, shifted=c["sd"])
+    return uvt, sc.let(f"puv{ch}", pu + pv)
 
 
 def _half(w, precision):
