@@ -10,7 +10,7 @@ fraction bits, the numerators in sub-pixel units squared.
 __all__ = ["exponent", "mantissa", "quantised", "recip_mantissa", "amounts", "row",
            "narrow_bound", "AMOUNT_BITS"]
 
-AMOUNT_BITS = 6          # a shift amount into FI, clamped to 2**6 - 1
+from hdl.span_unit.span import AMOUNT_BITS       # a shift amount into FI, clamped to 2**6 - 1
 
 
 def _wrap(x, bits):
@@ -38,37 +38,39 @@ def mantissa(x, e, frac, M):
 
 
 def recip_mantissa(omega, M):
-    """The narrow engine's reciprocal: 2**(M-2+sh) / Omega rounded half up, sh the position
-    of |Omega|'s leading one (so |rs| is in (2**(M-3), 2**(M-2)]); and sh."""
+    """The narrow engine's reciprocal: 2**(M-1+sh) / Omega rounded half up and saturated at
+    2**(M-1) - 1, sh the position of |Omega|'s leading one; and sh."""
     sh = abs(int(omega)).bit_length() - 1
-    num, den = 1 << (M - 2 + sh), int(omega)
-    q = (2 * num + abs(den)) // (2 * abs(den))          # round half up of the magnitude
-    return (q if den > 0 else -q), sh
+    num, den = 1 << (M - 1 + sh), abs(int(omega))
+    q = min((2 * num + den) // (2 * den), (1 << (M - 1)) - 1)
+    return (q if omega > 0 else -q), sh
 
 
 def amounts(e0, e1, linear, FI, M, left):
-    """The shifts of a channel's products into FI: Phi's (u t1 + v t2 at 2 M - 5 - e0
-    fraction bits, u d + v e at 2 M - 3 - e0 for a linear channel) and d's (Pu u + Pv v at
-    2 M - 3 - e1), each ``(p << left) >> amount``, clamped to [0, 2**AMOUNT_BITS - 1]."""
+    """The shifts of a channel's products into FI: Phi's (u t1 + v t2 at 2 M - 4 - e0
+    fraction bits, u d + v e at 2 M - 2 - e0 for a linear channel) and d's (Pu u + Pv v at
+    2 M - 2 - e1), each ``(p << left) >> amount``, clamped to [0, 2**AMOUNT_BITS - 1]."""
     top = (1 << AMOUNT_BITS) - 1
     clamp = lambda a: min(max(a, 0), top)
-    phi = left - (FI - 2 * M + (3 if linear else 5) + e0)
-    return clamp(phi), clamp(left - (FI - 2 * M + 3 + e1))
+    phi = left - (FI - 2 * M + (2 if linear else 4) + e0)
+    return clamp(phi), clamp(left - (FI - 2 * M + 2 + e1))
 
 
 def row(nu, nv, rs, sh, ch, M, FI, FO, left, linear):
     """Phi and d at FI of one channel at a span's first pixel, as the narrow engine computes
     them. ``ch``: the channel's mantissas ``a..e``, ``pu``, ``pv``, its fixed-point ``f``
     (FO) and ``p0`` (FI), and its amounts ``sphi``, ``sd``."""
-    frac = M - 2
-    mant = lambda n: _wrap((n << frac) >> sh, M)                      # floor, M bits
-    rnd_uv = lambda p: _wrap((p + (1 << (M - 3))) >> frac, M)
+    top = (1 << (M - 1)) - 1
+    sat = lambda x: _wrap(min(x, top), M)
+    # N = nu / 2**sh to M - 2 fraction bits, rounded: floor at M - 1 bits, then half of it
+    mant = lambda n: sat((_wrap((n << (M - 1)) >> sh, M + 1) + 1) >> 1)
+    rnd_uv = lambda p: sat((p + (1 << (M - 3))) >> (M - 2))         # M - 1 fraction bits
     u, v = rnd_uv(mant(nu) * rs), rnd_uv(mant(nv) * rs)
     shift = lambda p, a: (p << left) >> a
     if linear:
         t1, t2 = ch["d"], ch["e"]
-    else:
-        t = lambda base, x: _wrap(((base << frac) + x + (1 << (M - 1))) >> M, M)
+    else:                                      # at exponent e0 + 2: M + 1 bits below the sum
+        t = lambda base, x: _wrap(((base << (M - 1)) + x + (1 << M)) >> (M + 1), M)
         t1 = t(ch["d"], ch["a"] * u + ch["c"] * v)
         t2 = t(ch["e"], ch["b"] * v)
     phi = (ch["f"] << (FI - FO)) + shift(u * t1, ch["sphi"]) + shift(v * t2, ch["sphi"])
@@ -80,15 +82,19 @@ def row(nu, nv, rs, sh, ch, M, FI, FO, left, linear):
 def narrow_bound(M, e0, e1, FI):
     """The narrow engine's errors at a span's first pixel against the float model of the same
     exact constants, in the constants' units: ``(Phi, d)``; after i steps Phi is off by at
-    most Phi's + i d's. They are ``flows.bfp.bound``'s terms, derived for M - 1 bits (so each
-    coefficient's rounding, e(e) at M bits or 2 e(e) where it saturates, is within e(e) at
-    M - 1), with u and v off by 3 r (5 r at M bits: ``hdl.span_unit.span._uv_narrow``) and
-    P0 exact, plus a floor to FI for each of the two shifted products (2**-FI each)."""
-    m, rs = M - 1, 3
-    eps = lambda x: 2.0 ** (x - m)
-    grow = 1 + rs * 2.0 ** -(m - 3)            # the products of two roundings
+    most Phi's + i d's. With e = 2**(e0 - M), each coefficient's mantissa is off by at most
+    2 e (e, or 2 e where it saturates), u and v by eps = 5 2**-M (``_uv_narrow``), and u, v
+    >= 0, u + v <= 1 at the first pixel (docs/quadratic.md, "The narrow row engine"):
+    - t1 = d + a u + c v: 2 e (1 + u + v) + 2**e0 2 eps <= 14 e, then its rounding at
+      exponent e0 + 2, 4 e: 18 e. t2 = e + b v: 4 e + 5 e + 4 e = 13 e.
+    - Phi = f + u t1 + v t2: (u + v) 18 e, and eps (|t1| + |t2|) <= eps 2**(e0+2) = 20 e:
+      38 e. d = P0 + Pu u + Pv v (P0 exact): 2 e1' (u + v) + 2**e1 2 eps = 12 e1', e1' =
+      2**(e1 - M).
+    Products of two errors add under a factor 1 + 2**-(M-5); each shifted product's floor to
+    FI adds 2**-FI."""
+    grow = 1 + 2.0 ** -(M - 5)
     floors = 2 * 2.0 ** -FI
-    return ((7 + 12 * rs) * eps(e0) * grow + floors, (3 + 4 * rs) * eps(e1) * grow + floors)
+    return 38 * 2.0 ** (e0 - M) * grow + floors, 12 * 2.0 ** (e1 - M) * grow + floors
 
 
 def quantised(values, frac, M):

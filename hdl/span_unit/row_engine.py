@@ -41,13 +41,15 @@ def const_fields(setup):
 class RowEngine(wiring.Component):
     """``plan``: the raster's plan; ``rows``: the walker's row fields (``{name: shape}``);
     ``flat``: the flat words' names; ``consts``: the channel-constant memory's fields
-    (``{name: shape}``) and its index bits, or None."""
+    (``{name: shape}``) and its index bits, or None; ``narrow``: the mantissa bits of the
+    narrow engine (``span.row_engine``; its rows ``span.narrow_row_fields``), or None."""
 
-    def __init__(self, plan, rows, flat=(), consts=None):
+    def __init__(self, plan, rows, flat=(), consts=None, narrow=None):
         self.plan, self.rows, self.flat = plan, dict(rows), tuple(flat)
         self.const_fields, self.index_bits = consts or (None, 0)
+        self.narrow = narrow
         form = _form(plan, tuple(self.rows.items()), self.flat,
-                     consts and (tuple(consts[0].items()), consts[1]))
+                     consts and (tuple(consts[0].items()), consts[1]), narrow)
         # its memories, its row interval and length, and its last write's offset from the start
         self.memories, self.ii, self.length, self.offset = form
         # the memories written at the slot the engine gives (the serial engine's): what a row
@@ -74,7 +76,7 @@ class RowEngine(wiring.Component):
         rows = {k: getattr(self.i, k) for k in self.rows}
         writes, started, written, t = plan_row_engine(m, self.plan, self.plan.setup.w, rows,
                                                       self.i, self.space, platform,
-                                                      self.flat, consts)
+                                                      self.flat, consts, self.narrow)
         for name, vals, en, slot in writes:
             port = getattr(self, name)
             m.d.comb += [port.en.eq(en)] + [port.data[k].eq(x) for k, x in vals.items()]
@@ -86,7 +88,7 @@ class RowEngine(wiring.Component):
 
 
 @functools.lru_cache(maxsize=None)
-def _form(plan, rows, flat, consts):
+def _form(plan, rows, flat, consts, narrow=None):
     """The engine's memories (``{name: ({field: shape}, slotted)}``), its row interval, its
     length and the offset of a row's last write from its start, from a build of it on its
     own."""
@@ -97,7 +99,7 @@ def _form(plan, rows, flat, consts):
         fields, bits = consts
         consts = (Signal(bits), {k: Signal(s, name=k) for k, s in fields}, bits)
     writes, _, _, t = plan_row_engine(m, plan, plan.setup.w, rows, link, Signal(), None, flat,
-                                      consts)
+                                      consts, narrow)
     Fragment.get(m, None)                        # (its memories used, for Amaranth's checks)
     memories = {name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None)
                 for name, vals, _, slot in writes}

@@ -8,25 +8,31 @@ and the stepper are components of their own.
   difference along x, Pu u + Pv v + P0. Exact numerators: rounding never accumulates across
   rows.
 """
-from amaranth.hdl import Const, Signal, unsigned
+from amaranth.hdl import Const, Signal, signed, unsigned
 from amaranth.lib.memory import Memory
 
 from ..sched import OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
 
-__all__ = ["narrow_left", "plan_row_engine", "row_engine", "row_engine_serial", "row_products",
+AMOUNT_BITS = 6       # a narrow product's shift into FI (``golden.bfp.AMOUNT_BITS``)
+
+__all__ = ["narrow_left", "narrow_row_fields", "plan_row_engine", "row_engine", "row_engine_serial", "row_products",
            "split_fields", "turns"]
 
 
-def plan_row_engine(m, plan, w, rows, row_link, space, platform=None, flat=(), consts=None):
+def plan_row_engine(m, plan, w, rows, row_link, space, platform=None, flat=(), consts=None,
+                    narrow=None):
     """The plan's row engine: every channel a job (:func:`row_engine`, on ``row_mults`` or
-    one multiplier per channel and one more), or one channel a job
-    (:func:`row_engine_serial`, ``row_serial``)."""
-    engine = row_engine_serial if plan.row_serial else row_engine
-    return engine(m, w, plan.modes, rows, row_link, space, platform, flat,
-                  plan.row_serial or plan.row_mults or len(plan.channels) + 1, consts,
-                  plan.precision)
+    one multiplier per channel and one more; ``narrow``: on M-bit mantissas), or one channel
+    a job (:func:`row_engine_serial`, ``row_serial``)."""
+    mults = plan.row_serial or plan.row_mults or len(plan.channels) + 1
+    if plan.row_serial:
+        assert not narrow, "the narrow engine has every channel in a job"
+        return row_engine_serial(m, w, plan.modes, rows, row_link, space, platform, flat,
+                                 mults, consts, plan.precision)
+    return row_engine(m, w, plan.modes, rows, row_link, space, platform, flat, mults, consts,
+                      plan.precision, narrow)
 
 
 def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None,
@@ -247,25 +253,47 @@ def _uv(sc, w, v):
             sc.mul("v", v["nv"], v["rs"], post=fq, shifted=True))
 
 
+def narrow_row_fields(w, M, modes, flat=()):
+    """The narrow engine's row fields (``{name: shape}``): the walker's row, the triangle's
+    M-bit reciprocal ``rs`` and its ``sh``, and per channel the M-bit mantissas of a..e (d, e
+    for a linear channel) and of Pu, Pv, f as the wide engine has it, P0 and 2A at FI, and
+    the shift amounts ``sphi``, ``sd`` (``golden.bfp.amounts``)."""
+    fields = {"j": unsigned(w.wrow), "tri": unsigned(16), **{k: unsigned(16) for k in flat},
+              "xl": signed(w.wi), "xr": signed(w.wi),
+              **{k: unsigned(w.wn) for k in ("E_u", "E_v", "B_u", "B_v")},
+              "rs": signed(M), "sh": unsigned(6)}
+    for ch, mode in enumerate(modes):
+        keys = ("d", "e") if mode == "linear" else ("a", "b", "c", "d", "e", "pu", "pv")
+        fields.update({f"c{ch}_{k}": signed(M) for k in keys})
+        fields.update({f"c{ch}_f": signed(OPERAND), f"c{ch}_p0": signed(w.FI + 9),
+                       f"c{ch}_a2": signed(w.FI + 9), f"c{ch}_sphi": unsigned(AMOUNT_BITS),
+                       f"c{ch}_sd": unsigned(AMOUNT_BITS)})
+    return fields
+
+
 def narrow_left(w, M):
     """The narrow engine's left shift L: each product of M-bit mantissas is summed into FI as
-    ``(p << L) >> amount``; L = FI - 2 M + 11 (at least 0) keeps every amount >= 0 for
+    ``(p << L) >> amount``; L = FI - 2 M + 10 (at least 0) keeps every amount >= 0 for
     exponents up to 6 (a..e, |x| < 64) and 7 (Pu, Pv): see :func:`_channel_narrow`."""
-    return max(w.FI - 2 * M + 11, 0)
+    return max(w.FI - 2 * M + 10, 0)
 
 
 def _uv_narrow(sc, w, v, M):
-    """:func:`_start`, then (u, v) as M-bit mantissas with M - 2 fraction bits (in [0, 1] at
-    a span's first pixel, eq 18-20): nu 2**(M-2-sh) floored (|nu| < 2**(sh+1) there), in two
-    shifts, each a clock; times ``rs`` (the setup's M-bit 2**(M-2+sh) / Omega, rounded),
-    rounded to M - 2 fraction bits. Off by at most 5 r, r = 2**-(M-1): the floor 2 r, the
-    reciprocal's rounding 2 r, the product's r (docs/quadratic.md)."""
+    """:func:`_start`, then (u, v) as M-bit mantissas with M - 1 fraction bits (in [0, 1] at
+    a span's first pixel, eq 18-20): N = nu / 2**sh (|N| < 2, as |nu| <= |Omega| <
+    2**(sh+1)) to M - 2 fraction bits, rounded, by two shifts, each a clock; times ``rs``
+    (the setup's M - 1 fraction bits of 2**sh / Omega, rounded), rounded to M - 1 fraction
+    bits. Each of the three saturates at 2**(M-1) - 1 (the one value that rounds past it).
+    Off by at most 5 2**-M (docs/quadratic.md, "The narrow row engine")."""
     _start(sc, w, v)
-    coarse = sc.lets(**{f"{a}_hi": (v[f"n{a}"] << (M - 2)) >> Cat(Const(0, 3), v["sh"][3:])
+    top = (1 << (M - 1)) - 1
+    sat = lambda x: Mux(x > top, top, x)[:M].as_signed()
+    coarse = sc.lets(**{f"{a}_hi": (v[f"n{a}"] << (M - 1)) >> Cat(Const(0, 3), v["sh"][3:])
                         for a in "uv"})
-    mant = sc.lets(**{f"{a}_m": (coarse[f"{a}_hi"] >> v["sh"][:3])[:M].as_signed()
+    fine = sc.lets(**{f"{a}_n2": (coarse[f"{a}_hi"] >> v["sh"][:3])[:M + 1].as_signed()
                       for a in "uv"})
-    post = lambda p: ((p + (1 << (M - 3))) >> (M - 2))[:M].as_signed()
+    mant = sc.lets(**{f"{a}_m": sat((fine[f"{a}_n2"] + 1) >> 1) for a in "uv"})
+    post = lambda p: sat((p + (1 << (M - 3))) >> (M - 2))
     return (sc.mul("u", mant["u_m"], v["rs"], post=post),
             sc.mul("v", mant["v_m"], v["rs"], post=post))
 
@@ -273,28 +301,30 @@ def _uv_narrow(sc, w, v, M):
 def _channel_narrow(sc, M, ch, mode, c, u, v):
     """One channel's products on M-bit mantissas (block floating point, issue 49): a..e
     share the channel's exponent e0 on the triangle, Pu and Pv its exponent e1; u, v have
-    M - 2 fraction bits. t1 = d + a u + c v and t2 = e + b v (eq 17) are exact sums, then
-    rounded to M bits at exponent e0 + 2 (|t1| < 3 2**e0); u t1 + v t2 and Pu u + Pv v go
-    into FI through the multipliers' shifters by the setup's amounts (``sphi``: L - (FI -
-    2 M + 5 + e0), or + 3 for a linear channel, whose t1, t2 are d, e; ``sd``: L - (FI - 2 M
-    + 3 + e1)), floored there. Returns (u t1 + v t2, Pu u + Pv v) at FI (None for a linear
-    channel's second)."""
+    M - 1 fraction bits. t1 = d + a u + c v and t2 = e + b v (eq 17) are exact sums, then
+    rounded to M bits at exponent e0 + 2 (|t1| < 2**(e0+1), with room for u and v's
+    rounding); u t1 + v t2 and Pu u + Pv v go into FI through the multipliers' shifters by
+    the setup's amounts (``sphi``: L - (FI - 2 M + 4 + e0), or L - (FI - 2 M + 2 + e0) for a
+    linear channel, whose t1, t2 are d, e; ``sd``: L - (FI - 2 M + 2 + e1)), floored there.
+    Returns (u t1 + v t2, Pu u + Pv v) at FI (None for a linear channel's second)."""
     if mode == "linear":
         t1, t2 = c["d"], c["e"]
     else:
         au, cv, bv = sc.mul(f"au{ch}", c["a"], u), sc.mul(f"cv{ch}", c["c"], v), \
             sc.mul(f"bv{ch}", c["b"], v)
-        rnd = lambda x: ((x + (1 << (M - 1))) >> M)[:M].as_signed()
+        # Pu u, Pv v issued beside a u, c v, b v, as the wide engine's: their operands are
+        # read early, so fewer copies of them are made for the rows in flight
+        pu = sc.mul(f"pu{ch}", c["pu"], u, shifted=c["sd"])
+        pv = sc.mul(f"pv{ch}", c["pv"], v, shifted=c["sd"])
+        rnd = lambda x: ((x + (1 << M)) >> (M + 1))[:M].as_signed()
         acv = sc.let(f"acv{ch}", au + cv)
-        t1 = sc.apply(f"t1_{ch}", lambda d, x: rnd((d << (M - 2)) + x), c["d"], acv)
-        t2 = sc.apply(f"t2_{ch}", lambda e, x: rnd((e << (M - 2)) + x), c["e"], bv)
+        t1 = sc.apply(f"t1_{ch}", lambda d, x: rnd((d << (M - 1)) + x), c["d"], acv)
+        t2 = sc.apply(f"t2_{ch}", lambda e, x: rnd((e << (M - 1)) + x), c["e"], bv)
     ut = sc.mul(f"ut{ch}", u, t1, shifted=c["sphi"])
     vt = sc.mul(f"vt{ch}", v, t2, shifted=c["sphi"])
     uvt = sc.let(f"uvt{ch}", ut + vt)
     if mode == "linear":
         return uvt, None
-    pu = sc.mul(f"pu{ch}", c["pu"], u, shifted=c["sd"])
-    pv = sc.mul(f"pv{ch}", c["pv"], v, shifted=c["sd"])
     return uvt, sc.let(f"puv{ch}", pu + pv)
 
 
