@@ -46,6 +46,7 @@ MESHES = [("default torus, 12 x 12 segments", "default", None),
           ("torus, 64 x 64 segments, 256 x 256", "default", [64, 64])]
 
 MANTISSAS = (18, 20, 22, 25)
+BUILT = (18, 20)                # the narrow engine's mantissas: mult18's, mult20's
 # issue 49's targets: fragments per clock on each mesh, and the raster's MULT18X18D
 TARGETS = dict(zip((label for label, _, _ in MESHES), (0.95, 0.75, 0.75)))
 WIDE = 4                       # a product of 35-bit operands: four 18 x 18 blocks (or passes)
@@ -199,6 +200,33 @@ def blocks(inputs, m, screen_bits, sub_bits, modes, rate, recip=False):
     return narrow.mean(), int(np.ceil(today)), int(np.ceil(path))
 
 
+def built_share(inputs, m, screen_bits, sub_bits, modes):
+    """The narrow engine as built (``span.row_engine(narrow=m)``): per triangle drawn, whether
+    the setup would choose it (``golden.bfp.narrow_ok``: its derived bound, with the setup's
+    own terms, within the raster's budget); returns the share of triangles drawn and of their
+    rows."""
+    from golden.bfp import narrow_ok
+    x, y = R._vertices(inputs)
+    tri, _, py = R.coverage(x, y, sub_bits, screen_bits)
+    st = R.sorted_triangles(inputs, len(modes), sub_bits)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        omega = q.omega(st["x1"], st["y1"], st["x2"], st["y2"])
+        ux, vx = st["y2"] / omega, -st["y1"] / omega
+        n = np.floor(np.nan_to_num(np.abs(omega) / st["y2"], nan=0.0, posinf=0.0))
+    n = np.minimum(n, (1 << screen_bits) - 1)
+    chans = []
+    for ch, mode in enumerate(modes):
+        I = [st["values"][ch][:, k] for k in range(3)]
+        a, b, c, d, e, _ = R.channel_uv(mode, I, st["e"]).T
+        with np.errstate(invalid="ignore"):
+            Pu, Pv = 2 * a * ux + c * vx, 2 * b * vx + c * ux
+        chans.append((mode == "linear", _exp(a, b, c, d, e), _exp(Pu, Pv)))
+    ok = narrow_ok(m, 2 * screen_bits + 20, chans, n)
+    drawn = np.unique(tri)
+    rows = np.unique(tri.astype(np.int64) * (2 << screen_bits) + py) // (2 << screen_bits)
+    return ok[drawn].mean(), ok[rows].mean()
+
+
 def _scene_inputs(name, segments):
     scene = S.load(SCENES / f"{name}.toml")
     if segments:
@@ -235,6 +263,13 @@ def main():
         slivers = f"{(width[drawn] < 1).mean() * 100:.1f} %"
         print(f"| {label} | {len(drawn):,} | {slivers} | " + " | ".join(cells)
               + f" | {ratio:.3f} |")
+    print("\n| triangles | " + " | ".join(f"narrow engine, M = {m}: triangles, rows"
+                                       for m in BUILT) + " |")
+    print("| --- | " + " | ".join("---" for _ in BUILT) + " |")
+    for label, inputs, sb, sub, modes in cases:
+        got = [built_share(inputs, m, sb, sub, modes) for m in BUILT]
+        print(f"| {label} | " + " | ".join(f"{t * 100:.1f} %, {r * 100:.1f} %" for t, r in got)
+              + " |", flush=True)
     narrow = ((18, False), (20, False), (20, True), (22, True))
     print("\n| mesh | target (fragments / clock) | MULT18X18D today | "
           + " | ".join(f"{m} bits{', u and v from 1/Omega' if r else ''}: rows on the narrow "

@@ -22,7 +22,7 @@ from hdl.span_unit.span import narrow_row_fields
 from .fpga import OUT, _run, tool
 
 CHANNELS = (3, 9)
-FORMS = (("wide (today)", None), ("narrow, M = 20", 20), ("narrow, M = 18", 18))
+FORMS = (("wide (today)", None), *((f"narrow, M = {m}", m) for m in (22, 21, 20, 18)))
 COLUMNS = ("MULT18X18D", "LUT4", "FF")
 
 

@@ -2,8 +2,8 @@
 wide ones the raster's schedules use today (docs/quadratic.md).
 
 - ``18 x 18``: :func:`hdl.dsp.mult18`, one MULT18X18D with its own registers;
-- ``20 x 20``: :func:`hdl.dsp.mult20`, one MULT18X18D and the two low bits' partial
-  products in logic;
+- ``20 x 20``, ``22 x 22``: :func:`hdl.dsp.mult_narrow`, one MULT18X18D and the two or four
+  low bits' partial products in logic;
 - ``35 x 35``: a product as wide as the schedules' operands (``hdl.sched.OPERAND``), as
   Yosys infers it between registers: its four blocks, not the schedules' form of them
   (which registers each partial product, to close 125 MHz).
@@ -20,12 +20,16 @@ from amaranth.hdl import Module, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from hdl.dsp import Target, mult18, mult20
+import functools
+
+from hdl.dsp import Target, mult18, mult_narrow
 from hdl.sched import OPERAND
 
 from .fpga import DEVICES, OUT, SerialWrapper, _run, place, tool
 
-FORMS = {"18 x 18": (18, mult18, 2), "20 x 20": (20, mult20, 4), "35 x 35": (OPERAND, None, 2)}
+FORMS = {"18 x 18": (18, mult18, 2),
+         **{f"{n} x {n}": (n, functools.partial(mult_narrow, bits=n), 4) for n in (20, 22)},
+         "35 x 35": (OPERAND, None, 2)}
 
 
 class _Field:

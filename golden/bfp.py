@@ -8,7 +8,8 @@ Fixed-point inputs are integers: a..f, Pu, Pv with FO fraction bits, P0, 2A, Phi
 fraction bits, the numerators in sub-pixel units squared.
 """
 __all__ = ["exponent", "mantissa", "quantised", "recip_mantissa", "amounts", "row",
-           "narrow_bound", "AMOUNT_BITS"]
+           "narrow_bound", "narrow_ok", "other_terms", "rs_mantissa", "choice",
+           "choice_constants", "AMOUNT_BITS", "BUDGET", "UNIT"]
 
 from hdl.span_unit.span import AMOUNT_BITS       # a shift amount into FI, clamped to 2**6 - 1
 
@@ -19,22 +20,30 @@ def _wrap(x, bits):
     return x - (1 << bits) if x >> (bits - 1) else x
 
 
-def exponent(values, frac):
-    """The least e with every |x| < 2**e (x: integers with ``frac`` fraction bits): the bit
-    length of the OR of the magnitudes, less ``frac``."""
+def exponent(values, frac, M):
+    """A group's exponent e: every x has -2**e <= x < 2**e (x: integers with ``frac``
+    fraction bits), from the bit length of the OR of the values' one's-complement
+    magnitudes (x, or -x - 1 = ~x for a negative one: no negation in the setup), at least
+    M - 1 bits (smaller groups' mantissas are then exact, and no shift is to the left)."""
     top = 0
     for x in values:
-        top |= abs(int(x))
-    return top.bit_length() - frac
+        x = int(x)
+        top |= ~x if x < 0 else x
+    return max(top.bit_length(), M - 1) - frac
 
 
 def mantissa(x, e, frac, M):
     """``x`` (``frac`` fraction bits) as an M-bit signed mantissa at exponent ``e``:
-    x 2**(M-1-e), rounded half up, the one value that rounds up to 2**(M-1) saturated."""
-    s = frac + e - (M - 1)
-    x = int(x)
-    q = (x + (1 << (s - 1))) >> s if s > 0 else x << -s
-    return min(q, (1 << (M - 1)) - 1)
+    x 2**(M-1-e), floored (within [-2**(M-1), 2**(M-1)), so never saturated)."""
+    return int(x) >> (frac + e - (M - 1))
+
+
+def rs_mantissa(rcp, neg, R, M):
+    """The narrow engine's reciprocal from the setup's: ``rcp`` ~ 2**R / m (m = |Omega| /
+    2**sh in [1, 2)) rounded half up to M - 1 fraction bits, saturated at 2**(M-1) - 1, and
+    negated for a negative Omega."""
+    q = min((int(rcp) + (1 << (R - M))) >> (R - M + 1), (1 << (M - 1)) - 1)
+    return -q if neg else q
 
 
 def recip_mantissa(omega, M):
@@ -79,25 +88,93 @@ def row(nu, nv, rs, sh, ch, M, FI, FO, left, linear):
     return phi, ch["p0"] + shift(ch["pu"] * u, ch["sd"]) + shift(ch["pv"] * v, ch["sd"])
 
 
-def narrow_bound(M, e0, e1, FI):
+def narrow_bound(M, e0, e1, FI, recip_err=0.0):
     """The narrow engine's errors at a span's first pixel against the float model of the same
     exact constants, in the constants' units: ``(Phi, d)``; after i steps Phi is off by at
     most Phi's + i d's. With e = 2**(e0 - M), each coefficient's mantissa is off by at most
-    2 e (e, or 2 e where it saturates), u and v by eps = 5 2**-M (``_uv_narrow``), and u, v
-    >= 0, u + v <= 1 at the first pixel (docs/quadratic.md, "The narrow row engine"):
-    - t1 = d + a u + c v: 2 e (1 + u + v) + 2**e0 2 eps <= 14 e, then its rounding at
-      exponent e0 + 2, 4 e: 18 e. t2 = e + b v: 4 e + 5 e + 4 e = 13 e.
-    - Phi = f + u t1 + v t2: (u + v) 18 e, and eps (|t1| + |t2|) <= eps 2**(e0+2) = 20 e:
-      38 e. d = P0 + Pu u + Pv v (P0 exact): 2 e1' (u + v) + 2**e1 2 eps = 12 e1', e1' =
-      2**(e1 - M).
+    2 e (floored), u and v by eps = k 2**-M, k = 5 + 2**(M+1) ``recip_err`` (the numerator's
+    and the reciprocal's roundings, 2 each, the product's 1, and the reciprocal's relative
+    error: ``hdl.span_unit.span._uv_narrow``), and u, v >= 0, u + v <= 1 at the first pixel
+    (docs/quadratic.md, "The narrow row engine"):
+    - t1 = d + a u + c v: 2 e (1 + u + v) + 2**e0 2 eps <= (4 + 2 k) e, then its rounding at
+      exponent e0 + 2, 4 e: (8 + 2 k) e. t2 = e + b v: (8 + k) e.
+    - Phi = f + u t1 + v t2: (u + v) (8 + 2 k) e, and eps (|t1| + |t2|) <= eps 2**(e0+2) =
+      4 k e: (8 + 6 k) e (38 e at k = 5). d = P0 + Pu u + Pv v (P0 exact): 2 e1' (u + v) +
+      2**e1 2 eps = (2 + 2 k) e1', e1' = 2**(e1 - M).
     Products of two errors add under a factor 1 + 2**-(M-5); each shifted product's floor to
     FI adds 2**-FI."""
+    k = 5 + 2.0 ** (M + 1) * recip_err
     grow = 1 + 2.0 ** -(M - 5)
     floors = 2 * 2.0 ** -FI
-    return 38 * 2.0 ** (e0 - M) * grow + floors, 12 * 2.0 ** (e1 - M) * grow + floors
+    return ((8 + 6 * k) * 2.0 ** (e0 - M) * grow + floors,
+            (2 + 2 * k) * 2.0 ** (e1 - M) * grow + floors)
+
+
+BUDGET = 2.0 ** -15.37     # the raster's arithmetic, all terms (docs/quadratic.md, "Widths")
+
+
+def other_terms(n):
+    """What the setup's fixed-point arithmetic spends on a triangle whose spans step at most
+    ``n`` times, beside the row engine's (docs/quadratic.md, "Widths from analysis", terms
+    1, 4, 6 and 7 and the floors to FI, at G = 168): the reciprocal's 2**-19.7, alpha floored
+    to 2**-34 n G, 2A's floors summed twice n (n - 1) / 2 2**-36, the exact mid-edges'
+    2**-24 and the FI floors' 2**-21."""
+    return (2.0 ** -19.7 + 2.0 ** -24 + 2.0 ** -21 + n * 168 * 2.0 ** -34
+            + n * (n - 1) / 2 * 2.0 ** -36)
+
+
+def narrow_ok(M, FI, channels, n, recip_err=0.0):
+    """The narrow engine's errors on a triangle within ``BUDGET`` (:func:`narrow_bound` after
+    ``n`` steps, and :func:`other_terms`), so that the raster's bound of 2**-(p+1) +
+    2**-15.37 + 2**-(p+6) holds on it as on the wide engine. ``channels``: per channel
+    (linear, e0, e1); a linear channel's Phi is off by at most (2 + 2 k) e (2 e (u + v) and
+    eps 2**(e0+1)) and its d, P0, is exact. Works on arrays."""
+    k = 5 + 2.0 ** (M + 1) * recip_err
+    ok = True
+    for linear, e0, e1 in channels:
+        phi, d = narrow_bound(M, e0, e1, FI, recip_err)
+        if linear:
+            phi, d = (2 + 2 * k) * 2.0 ** (e0 - M) * (1 + 2.0 ** -(M - 5)) + 2 * 2.0 ** -FI, 0.0
+        ok = ok & (phi + n * d + other_terms(n) <= BUDGET)
+    return ok
+
+
+UNIT = 48                  # the setup's choice sums its terms in units of 2**-48
+
+
+def choice_constants(M, FI, recip_err):
+    """The integer constants of the setup's choice (:func:`choice`): Phi's factor on a
+    quadratic and on a linear channel, d's, and the fixed terms and the budget in units of
+    2**-UNIT; each factor rounded up, the budget down."""
+    import math
+    k = 5 + 2.0 ** (M + 1) * recip_err
+    grow = 1 + 2.0 ** -(M - 5)
+    fixed = (2.0 ** -19.7 + 2.0 ** -24 + 2.0 ** -21) * 2.0 ** UNIT
+    return (math.ceil((8 + 6 * k) * grow), math.ceil((2 + 2 * k) * grow),
+            math.ceil((2 + 2 * k) * grow), math.ceil(fixed), math.floor(BUDGET * 2.0 ** UNIT))
+
+
+def choice(M, FI, FO, sub_bits, screen_bits, recip_err, sh, ly, channels):
+    """The setup's choice of the narrow engine for a triangle, as its RTL makes it, in
+    integers: :func:`narrow_ok` with n bounded by 2**kn (|Omega| < 2**(sh+1), y2 >=
+    2**ly sub-pixel units, so the widest chord W < 2**(sh+1-ly-sub_bits) pixels, and a span
+    at most 2**screen_bits), n (n - 1) / 2 by 2**(2 kn - 1), and each factor rounded up.
+    ``channels``: per channel (linear, bl0, bl1), the groups' clamped bit lengths (e0 =
+    bl0 - FO). True where every channel's sum is within the budget."""
+    cp, cl, cd, fixed, budget = choice_constants(M, FI, recip_err)
+    kn = min(max(sh + 1 - ly - sub_bits, 0), screen_bits)
+    common = ((168 << (kn + UNIT - 34)) + (1 << (2 * kn + UNIT - 37))
+              + ((2 << (UNIT - FI)) << kn) + (2 << (UNIT - FI)) + fixed)
+    for linear, bl0, bl1 in channels:
+        total = common + ((cl if linear else cp) << (bl0 + UNIT - FO - M))
+        if not linear:
+            total += cd << (bl1 + UNIT - FO - M + kn)
+        if total > budget:
+            return False
+    return True
 
 
 def quantised(values, frac, M):
     """A group's exponent and each value's mantissa (``mantissa``)."""
-    e = exponent(values, frac)
+    e = exponent(values, frac, M)
     return e, [mantissa(x, e, frac, M) for x in values]

@@ -15,7 +15,7 @@ from contextvars import ContextVar
 
 from amaranth.hdl import ClockSignal, Const, Instance, Mux, Signal, Value, signed
 
-__all__ = ["Target", "ecp5", "mult18", "mult20", "soft_mult", "soft_halves", "soft_as_mul",
+__all__ = ["Target", "ecp5", "mult18", "mult_narrow", "soft_mult", "soft_halves", "soft_as_mul",
            "Product"]
 
 
@@ -65,33 +65,38 @@ def mult18(m, name, a, b, en, platform):
     return p
 
 
-def mult20(m, name, a, b, en, platform):
-    """``a * b`` of two signed operands of at most 20 bits on one MULT18X18D, four clocks
-    later (issue 49's narrow products, docs/quadratic.md): with a = 4 aH + aL and b = 4 bH +
-    bL (aH, bH the top 18 bits, signed; aL, bL the low two, unsigned), a b = 16 aH bH +
-    4 (aH bL + aL bH) + aL bL. aH bH is the block's (:func:`mult18`: operands, then the
-    product, registered); the rest is summed in logic beside it, no more than two adders a
-    clock: aH bL, aL bH and aL bL (a 2-bit operand's conditional additions, :func:`soft_mult`),
-    then their sum, then the sum with the block's product. Everything holds while ``en`` is
-    low. Returns the 40-bit signed product register. ``flows.products`` measures it."""
+def mult_narrow(m, name, a, b, en, platform, bits=20):
+    """``a * b`` of two signed operands of at most ``bits`` (19-24) bits on one MULT18X18D,
+    four clocks later (issue 49's narrow products, docs/quadratic.md): with k = bits - 18,
+    a = 2**k aH + aL and b = 2**k bH + bL (aH, bH the top 18 bits, signed; aL, bL the low k,
+    unsigned), a b = 2**2k aH bH + 2**k (aH bL + aL bH) + aL bL. aH bH is the block's
+    (:func:`mult18`: operands, then the product, registered); the rest is summed in logic
+    beside it, no more than two adders a clock: aH bL, aL bH and aL bL (a k-bit operand's
+    conditional additions, :func:`soft_mult`), then their sum, then the sum with the block's
+    product. Everything holds while ``en`` is low. Returns the 2 ``bits``-bit signed product
+    register. ``flows.products`` measures it."""
     a, b = Value.cast(a), Value.cast(b)
-    if len(a) > 20 or len(b) > 20 or not (a.shape().signed and b.shape().signed):
-        raise ValueError(f"{name}: operands of at most 20 bits, signed; here {a.shape()} and "
-                         f"{b.shape()}")
-    wa, wb = (Signal(signed(20), name=f"{name}_w{s}") for s in "ab")    # sign-extended
+    k = bits - 18
+    if not 1 <= k <= 6:
+        raise ValueError(f"{name}: a narrow product of {bits} bits: 19 to 24")
+    if len(a) > bits or len(b) > bits or not (a.shape().signed and b.shape().signed):
+        raise ValueError(f"{name}: operands of at most {bits} bits, signed; here {a.shape()} "
+                         f"and {b.shape()}")
+    wa, wb = (Signal(signed(bits), name=f"{name}_w{s}") for s in "ab")    # sign-extended
     m.d.comb += [wa.eq(a), wb.eq(b)]
-    hi = mult18(m, f"{name}_hi", wa[2:].as_signed(), wb[2:].as_signed(), en, platform)
-    reg = lambda shape, k: Signal(shape, name=f"{name}_{k}", reset_less=True)
-    ra, rb = reg(signed(20), "sa"), reg(signed(20), "sb")
-    x, y, z = reg(signed(20), "x"), reg(signed(20), "y"), reg(4, "z")
-    side, hi2, p = reg(signed(24), "side"), reg(signed(36), "hi2"), reg(signed(40), "p")
+    hi = mult18(m, f"{name}_hi", wa[k:].as_signed(), wb[k:].as_signed(), en, platform)
+    reg = lambda shape, n: Signal(shape, name=f"{name}_{n}", reset_less=True)
+    ra, rb = reg(signed(bits), "sa"), reg(signed(bits), "sb")
+    x, y, z = reg(signed(18 + k), "x"), reg(signed(18 + k), "y"), reg(2 * k, "z")
+    side = reg(signed(20 + 2 * k), "side")
+    hi2, p = reg(signed(36), "hi2"), reg(signed(2 * bits), "p")
     with m.If(en):
         m.d.sync += [ra.eq(wa), rb.eq(wb),
-                     x.eq(soft_mult(rb[:2], ra[2:].as_signed())),
-                     y.eq(soft_mult(ra[:2], rb[2:].as_signed())),
-                     z.eq(soft_mult(ra[:2], rb[:2])),
-                     side.eq(((x + y) << 2) + z), hi2.eq(hi),
-                     p.eq((hi2 << 4) + side)]
+                     x.eq(soft_mult(rb[:k], ra[k:].as_signed())),
+                     y.eq(soft_mult(ra[:k], rb[k:].as_signed())),
+                     z.eq(soft_mult(ra[:k], rb[:k])),
+                     side.eq(((x + y) << k) + z), hi2.eq(hi),
+                     p.eq((hi2 << 2 * k) + side)]
     return p
 
 

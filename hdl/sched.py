@@ -24,7 +24,7 @@ clock later.
 from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
 
 from .bram import table_slice
-from .dsp import mult18, mult20
+from .dsp import mult18, mult_narrow
 from .term import Term, term
 
 __all__ = ["Schedule", "OPERAND", "MUL_LAT"]
@@ -83,8 +83,8 @@ class Schedule:
         multipliers' blocks are instantiated with their registers on ECP5 (:mod:`hdl.dsp`).
         ``narrow``: multipliers of one 18 x 18 block each, for the products whose operands
         fit ``narrow_bits`` signed bits (all of those, when there are any narrow ones): 18, one
-        MULT18X18D two clocks less than a wide one, or 20 (:func:`hdl.dsp.mult20`: the block
-        and its low bits' partial products in logic, as many clocks as a wide one).
+        MULT18X18D two clocks less than a wide one, or 19-24 (:func:`hdl.dsp.mult_narrow`: the
+        block and its low bits' partial products in logic, as many clocks as a wide one).
         ``host``: ``(schedule, index)``, a schedule whose multiplier ``index`` is this one's
         first: this one's operands join that multiplier's multiplexer, and its products come
         from that sum register. Finish this one first; the caller keeps their products apart
@@ -517,8 +517,11 @@ class Schedule:
                 rb = Signal(signed(bits), name=f"{n}_b")
                 self.m.d.comb += [ra.eq(opa), rb.eq(opb)]
                 if narrow:
-                    mult = mult18 if self.nbits == NARROW else mult20
-                    p = mult(self.m, f"{n}_x", ra, rb, self.en, self.platform)
+                    if self.nbits == NARROW:
+                        p = mult18(self.m, f"{n}_x", ra, rb, self.en, self.platform)
+                    else:
+                        p = mult_narrow(self.m, f"{n}_x", ra, rb, self.en, self.platform,
+                                        self.nbits)
                     self.m.d.comb += self._total(idx, True).eq(p)
                     continue
                 lo = OPERAND - 18

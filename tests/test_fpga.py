@@ -314,21 +314,22 @@ endmodule
     assert checked > 1500
 
 
-def test_a_20_bit_product_on_one_block_is_exact():
-    """hdl.dsp.mult20 (issue 49's narrow products: one MULT18X18D and the two low bits'
+@pytest.mark.parametrize("bits", [20, 21, 22])
+def test_a_narrow_product_on_one_block_is_exact(bits):
+    """hdl.dsp.mult_narrow (issue 49's narrow products: one MULT18X18D and the low bits'
     partial products in logic) against Python's integer product, four enabled clocks after
-    its operands, on the corners of the 20-bit signed range and 3,000 random pairs, with the
+    its operands, on the corners of the signed range and 3,000 random pairs, with the
     enable toggling. Its block is mult18's, whose ECP5 form is checked above."""
-    from hdl.dsp import mult20
-    rng = np.random.default_rng(20)
-    lo, hi = -(1 << 19), (1 << 19) - 1
+    from hdl.dsp import mult_narrow
+    rng = np.random.default_rng(bits)
+    lo, hi = -(1 << (bits - 1)), (1 << (bits - 1)) - 1
     corner = [lo, hi, -1, 0, 1, 2, 3, -4, lo + 3, hi - 3]
     pairs = [(x, y) for x in corner for y in corner]
     pairs += [tuple(map(int, rng.integers(lo, hi + 1, 2))) for _ in range(3000)]
     en_seq = rng.random(len(pairs)) < 0.7
     m = Module()
-    a, b, en = Signal(signed(20)), Signal(signed(20)), Signal()
-    p = mult20(m, "m", a, b, en, None)
+    a, b, en = Signal(signed(bits)), Signal(signed(bits)), Signal()
+    p = mult_narrow(m, "m", a, b, en, None, bits)
     got, want = [], []
 
     async def bench(ctx):
@@ -348,5 +349,5 @@ def test_a_20_bit_product_on_one_block_is_exact():
     sim.add_testbench(bench)
     sim.run()
     assert len(got) > 2000 and got == want
-    with pytest.raises(ValueError, match="at most 20 bits"):
-        mult20(m, "x", Signal(signed(21)), Signal(signed(4)), Signal(), None)
+    with pytest.raises(ValueError, match=f"at most {bits} bits"):
+        mult_narrow(m, "x", Signal(signed(bits + 1)), Signal(signed(4)), Signal(), None, bits)

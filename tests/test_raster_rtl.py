@@ -208,6 +208,48 @@ def test_setup_channels_in_turn_keep_the_contract(simulator, params):
     _keeps_the_contract(unit, params, 13, 0.6, 8, simulator)
 
 
+def _smooth(rng, n, p):
+    """Small triangles whose values and normals barely differ, as on a dense mesh: their
+    coefficients are small, so the setup chooses the narrow row engine for them."""
+    t = random_triangles(rng, n, **p, size=12)
+    for ch in range(p["channels"]):
+        base = rng.integers(-12000, 12000, n)
+        for k in range(3):
+            t[f"v{ch}_{k}"] = base + rng.integers(-300, 300, n)
+    for name in ("e01", "e02", "e12"):
+        t[name] = rng.integers(-200, 1, n)
+    return t
+
+
+@pytest.mark.parametrize("modes", ["linear,xshading,xshading", "exact,xshading"])
+def test_narrow_row_engine_keeps_the_contract(modes):
+    """``row_narrow=21``: block floating point (docs/quadratic.md, "The narrow row engine"):
+    the setup chooses per triangle, from its derived bound, the narrow engine (21-bit
+    mantissas, every product one MULT18X18D) or the wide one on one multiplier. Smooth
+    triangles (most of them narrow) interleaved with random ones and the hard cases (wide),
+    so rows switch engines often, under backpressure: the same fragments in the same order
+    within the same bound as the wide engine's, the culled count, and the latency stated."""
+    from flows.bfp import built_share
+    params = {**SMALL, "channels": len(modes.split(",")), "modes": modes, "row_narrow": 21}
+    unit = make_unit("raster", spec=True, **params)
+    p = unit.params
+    rng = np.random.default_rng(21)
+    smooth, rand = _smooth(rng, 24, p), random_triangles(rng, 24, **p, size=24)
+    mixed = {k: np.stack([smooth[k], rand[k]], 1).reshape(-1) for k in smooth}
+    # both engines in use: the float model's choice (the setup's, within rounding)
+    share = lambda t: built_share(t, 21, p["screen_bits"], p["sub_bits"],
+                                  modes.split(","))[0]
+    assert share(smooth) > 0.5 and share(rand) < 0.5, (share(smooth), share(rand))
+    hard, labels = raster_hard_cases(**p)
+    inputs = {k: np.concatenate([mixed[k], hard[k]]) for k in hard}
+    out, info = stream("raster", inputs, "amaranth", params, p_valid=0.8, p_ready=0.7, seed=21)
+    check(inputs, out, p)
+    assert info["culled"] == raster.culled(inputs)
+    k = labels.index("whole screen")
+    _, info = stream("raster", {f: hard[f][k:k + 1] for f in hard}, "amaranth", params)
+    assert info["latency"] == unit.latency
+
+
 OVERLAPPED = [
     {"modes": "exact,xshading,linear", "setup_ii": 12, "setup_mults": 4, "setup_narrow": 3},
     {"modes": "linear,xshading,xshading", "setup_ii": 24, "setup_mults": 1, "setup_narrow": 2}]

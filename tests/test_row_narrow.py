@@ -120,9 +120,10 @@ def _rows(rng, w, M, modes, n):
         if border:
             track = {"B_u": nu, "B_v": nv, "E_u": junk(), "E_v": junk()}
         fields = {"j": k % (1 << w.wrow), "tri": k, "xl": xl, "xr": xl + rng.randint(-3, 40),
-                  **{t: x & ((1 << w.wn) - 1) for t, x in track.items()}, "rs": rs, "sh": sh}
+                  **{t: x & ((1 << w.wn) - 1) for t, x in track.items()}, "rsm": rs, "sh": sh}
         for ch, (fixed, c, _, _) in enumerate(tri["ch"]):
-            fields.update({f"c{ch}_{key}": x for key, x in c.items()})
+            fields.update({f"c{ch}_{'n' if key not in ('f', 'p0', 'sphi', 'sd') else ''}{key}": x
+                           for key, x in c.items()})
             fields[f"c{ch}_a2"] = rng.randrange(-1 << 40, 1 << 40)
         rows.append((fields, tri))
     return rows
@@ -170,7 +171,7 @@ def _run(w, M, modes, rows, rng):
     return got
 
 
-@pytest.mark.parametrize("M", [20, 18])
+@pytest.mark.parametrize("M", [18, 20, 21, 22])
 def test_narrow_row_engine_against_its_model_and_the_float_model(M):
     rng = random.Random(49 + M)
     w = Widths(10, 4)

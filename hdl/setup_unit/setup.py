@@ -28,6 +28,20 @@ G_FRAC = 30        # fraction bits of g = 1/||Ni + Nj|| while it is computed (27
 __all__ = ["Widths", "Setup"]
 
 
+def _or(values):
+    out = values[0]
+    for x in values[1:]:
+        out = out | x
+    return out
+
+
+def _and(values):
+    out = values[0]
+    for x in values[1:]:
+        out = out & x
+    return out
+
+
 def _halves(a, b):
     """``a < b`` and ``a == b`` of each half (the high one by its sign): two short carry
     chains in place of one long one."""
@@ -117,12 +131,14 @@ def channel_fields(w, ch):
 class Setup:
     """The setup program; ``Raster`` runs it (``program``) on its own schedule."""
 
-    def __init__(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups="0"):
+    def __init__(self, screen_bits, sub_bits, channels, modes, recip, recip_iters, groups="0",
+                 narrow=0):
         self.w = Widths(screen_bits, sub_bits)
         self.channels = channels
         self.modes = parse_modes(modes, channels)
         self.groups = parse_groups(groups, channels)
         self.recip, self.recip_iters = recip, recip_iters
+        self.narrow = narrow       # the narrow row engine's mantissa bits (0: none)
 
     def sort(self, sc, v):
         """Ranks by (y, x, index) (registered) -> vertices top/mid/bottom, edges and values in
@@ -233,6 +249,8 @@ class Setup:
         rcp = self._reciprocal(sc, n, W)
         rs = sc.let("rs", Mux(flags["neg"], -rcp, rcp))           # the sign of 1/Omega in it
         out.update(rs=rs, sh=sh)
+        if self.narrow:
+            out.update(self._narrow_triangle(sc, rcp, flags["neg"], sh, y2))
         for e, kind, num, den, bits in div_jobs:
             q, rem = self._floor_divide(sc, f"{e}_{kind}", num, den, bits)
             out[f"{e}_{kind}"] = q
@@ -261,10 +279,18 @@ class Setup:
             out.update(self._tracks(sc, r, out, xt, yt))
             return {**out, **{k: {**v, **alpha}[k] for k in self.job_inputs}}
         g = self._exact_mid_edges(sc, v) if "exact" in self.modes else {}
+        oks = []
         for ch, mode in enumerate(self.modes):
             coef = self._channel(sc, v, g, ch, mode)
             span = self._span(sc, coef, alpha, ch, mode == "linear")
             out.update({f"c{ch}_{k}": val for k, val in span.items()})
+            if self.narrow:
+                fields, ok = self._narrow_channel(sc, span, ch, mode == "linear", out["kn"])
+                out.update(fields)
+                oks.append(ok)
+        if self.narrow:                 # the narrow engine holds every channel's bound
+            out["narrow"] = sc.let("narrow", _and(oks))
+            del out["kn"]
         return out
 
     @property
@@ -285,6 +311,80 @@ class Setup:
         names (0 for a linear channel: then a = b = c = 0 and every other sum is a linear
         channel's, bit for bit) and ``au``, ``av``."""
         return self._span(sc, self._channel(sc, v, {}, 0, "xshading"), v, 0, False)
+
+    def _narrow_triangle(self, sc, rcp, neg, sh, y2):
+        """The narrow row engine's reciprocal ``rsm`` (``golden.bfp.rs_mantissa``: 1/m to
+        M - 1 fraction bits, rounded, saturated, signed) and ``kn``, a bound on the steps
+        along a span: |Omega| < 2**(sh+1) and y2 >= 2**ly, so the widest chord is below
+        2**(sh+1-ly-sub_bits) pixels (``golden.bfp.choice``)."""
+        M, R, w = self.narrow, self.w.R, self.w
+        top = (1 << (M - 1)) - 1
+        q = sc.let("rsm_q", (rcp + (1 << (R - M))) >> (R - M + 1))
+        mag = sc.let("rsm_mag", Mux(q > top, top, q)[:M - 1])
+        rsm = sc.let("rsm", Mux(neg, -mag, mag), shape=signed(M))
+        ly = sc.let("ly", Term.call(arith.leading_one, y2[:w.wrel], w.wrel))
+        k = sc.let("kn_raw", sh + 1 - ly - w.sub_bits, shape=signed(8))
+        kn = sc.let("kn", Mux(k < 0, 0, Mux(k > w.screen_bits, w.screen_bits, k)),
+                    shape=range(w.screen_bits + 1))
+        return {"rsm": rsm, "kn": kn}
+
+    def _narrow_channel(self, sc, span, ch, linear, kn):
+        """One channel's constants for the narrow row engine (issue 49's block floating
+        point, ``golden.bfp``): the exponents of (a..e) and of (Pu, Pv) from the bit length of
+        the OR of their one's-complement magnitudes (at least M - 1), the M-bit mantissas
+        (each value shifted right by its group's bit length less M - 1, floored), the shifts
+        of the engine's products into FI (``sphi``, ``sd``), and whether the channel's
+        derived bound on this triangle is within the raster's budget (``golden.bfp.choice``,
+        in units of 2**-UNIT)."""
+        from golden.bfp import UNIT, choice_constants
+        from ..span_unit.span import narrow_left
+        M, w, n = self.narrow, self.w, f"c{ch}"
+        FO, W = w.FO, OPERAND
+        group = ("d", "e") if linear else ("a", "b", "c", "d", "e")
+        ones = lambda x: Mux(x[-1], ~x, x)                  # ~x for a negative x: |x| - 1
+        bits = {}
+        for g, names in (("0", group), ("1", () if linear else ("pu", "pv"))):
+            if not names:
+                continue
+            top = sc.let(f"{n}_or{g}", _or([ones(span[k]).as_unsigned() for k in names]))
+            pos = sc.let(f"{n}_lo{g}", Term.call(arith.leading_one, top, len(top)))
+            # bit length (pos + 1, or 0 for 0), at least M - 1
+            bl = sc.let(f"{n}_bl{g}", Mux(top.any() & (pos >= M - 1), pos + 1, M - 1),
+                        shape=range(W + 1))
+            bits[g] = bl
+            amount = sc.let(f"{n}_s{g}", bl - (M - 1), shape=range(W + 1))
+            sc_ = sc.lets(**{f"{n}_n{k}": (span[k] >> amount)[:M].as_signed() for k in names})
+            bits.update({k: sc_[f"{n}_n{k}"] for k in names})
+        left = narrow_left(w, M)
+        c_phi = left - w.FI + 2 * M + FO - (2 if linear else 4)
+        fields = {f"{n}_n{k}": bits[k] for k in group + (() if linear else ("pu", "pv"))}
+        if linear:                              # a = b = c = 0: nothing stored or carried
+            fields.update({f"{n}_n{k}": Const(0, 1) for k in ("a", "b", "c", "pu", "pv")},
+                          **{f"{n}_sd": Const(0, 1)})
+        fields[f"{n}_sphi"] = sc.let(f"{n}_sphi", (c_phi - bits["0"])[:6], shape=6)
+        if not linear:
+            fields[f"{n}_sd"] = sc.let(f"{n}_sd", (left - w.FI + 2 * M + FO - 2 - bits["1"])[:6],
+                                       shape=6)
+        cp, cl, cd, fixed, budget = choice_constants(M, w.FI, self.recip_err)
+        common = ((term(Const(168, 8)) << (kn + (UNIT - 34)))
+                  + (term(Const(1, 1)) << (2 * kn + (UNIT - 37)))
+                  + (term(Const(2 << (UNIT - w.FI), UNIT)) << kn)
+                  + ((2 << (UNIT - w.FI)) + fixed))
+        total = common + (term(Const(cl if linear else cp, 8))
+                          << (bits["0"] + UNIT - FO - M).as_unsigned())
+        if not linear:
+            total = total + (term(Const(cd, 8)) << (bits["1"] + UNIT - FO - M + kn).as_unsigned())
+        ok = sc.let(f"{n}_ok", total <= budget)
+        return fields, ok
+
+    @property
+    def recip_err(self):
+        """The reciprocal's relative error (docs/quadratic.md, "The reciprocal": every 16-bit
+        mantissa through the seed and its Newton-Raphson steps; a restoring divider truncates
+        at 2**-R)."""
+        if self.recip == "divide":
+            return 2.0 ** -self.w.R
+        return (1.95e-3, 3.8e-6, 7.2e-9, 7.2e-9)[self.recip_iters]
 
     def shift(self, sh):
         """The schedule's shift: alpha = y2 r 2**(sub_bits + FA - R - sh)."""

@@ -26,6 +26,9 @@ KNOBS = {
     "setup_narrow": (0, (0, 6), "the setup's 18 x 18 multipliers (one MULT18X18D each)"),
     "row_serial": (0, (0, 9), ">0: the row engine's channels in turn on this many"),
     "setup_serial": (0, (0, 3), ">0: the setup's channels in turn on this many"),
+    "row_narrow": (0, (0, 24), ">0: the narrow row engine's mantissa bits (18-24; block "
+                               "floating point), the wide engine for the triangles it cannot "
+                               "hold"),
 }
 RECIPS = ("newton", "divide")
 # the sizes' ranges: a screen of 16 to 1,024 pixels a side, sub-pixel bits, channels,
@@ -68,6 +71,7 @@ class RasterPlan:
     setup_narrow: int = KNOBS["setup_narrow"][0]
     row_serial: int = KNOBS["row_serial"][0]
     setup_serial: int = KNOBS["setup_serial"][0]
+    row_narrow: int = KNOBS["row_narrow"][0]
 
     def __post_init__(self):
         self._check()
@@ -135,7 +139,7 @@ class RasterPlan:
         from ..setup_unit.setup import Setup
         p = self.params()
         return Setup(self.screen_bits, self.sub_bits, len(self.channels), p["modes"],
-                     self.recip, self.recip_iters, p["groups"])
+                     self.recip, self.recip_iters, p["groups"], self.row_narrow)
 
     def _check(self):
         """The checks that tie the knobs together; each error names the knob."""
@@ -173,6 +177,10 @@ class RasterPlan:
             raise ValueError(f"row_mults={self.row_mults} and row_serial={self.row_serial}: "
                              f"the row engine is one or the other (row_mults=0 with "
                              f"row_serial)")
+        if self.row_narrow and (self.row_narrow < 18 or self.row_serial or self.setup_serial):
+            raise ValueError(f"row_narrow={self.row_narrow}: mantissas of 18 to 24 bits, with "
+                             f"the channels together (row_serial=0, setup_serial=0); here "
+                             f"row_serial={self.row_serial}, setup_serial={self.setup_serial}")
         products = row_products(self.modes)
         if self.row_mults > products:      # fewer: shared, a longer row interval; more than
             raise ValueError(f"row_mults must be at most the row engine's {products} "
@@ -240,7 +248,12 @@ def _timing(plan):
     m = Module()
     m.submodules.setup = su = SetupEngine(plan, layout(fields), flat)
     m.submodules.walker = wk = Walker(plan.setup.w, len(plan.channels), su.fields,
-                                      su.current_fields, flat, bool(su.const_fields))
-    m.submodules.row_engine = re = RowEngine(plan, row_fields(wk), flat, const_fields(su))
+                                      su.current_fields, flat, bool(su.const_fields),
+                                      bool(plan.row_narrow))
+    if plan.row_narrow:
+        from .row_pair import RowPair
+        m.submodules.row_engine = re = RowPair(plan, row_fields(wk), flat)
+    else:
+        m.submodules.row_engine = re = RowEngine(plan, row_fields(wk), flat, const_fields(su))
     Fragment.get(m, None)                        # (every part used, for Amaranth's checks)
     return Timing(su.clocks, re.ii, re.length, su.end)

@@ -27,6 +27,7 @@ from .plan import KNOBS, RANGES as PLAN_RANGES, RECIPS, RasterPlan
 from .queue import Queue
 from .setup_engine import SetupEngine
 from .row_engine import RowEngine, const_fields, row_fields
+from .row_pair import RowPair
 from .walker import Walker
 from .stepper import Stepper
 
@@ -87,13 +88,16 @@ class Raster(Unit):
         wiring.connect(m, wiring.flipped(self.i), su.i)
         w = self.setup.w
         m.submodules.walker = wk = Walker(w, ch, su.fields, su.current_fields, flat,
-                                          bool(su.const_fields))
+                                          bool(su.const_fields), bool(self.plan.row_narrow))
         wiring.connect(m, su.o, wk.i)
         m.d.comb += wk.i_valid_next.eq(su.o_valid_next)
         if su.current_fields:
             m.d.comb += wk.current.eq(su.current)
-        m.submodules.row_engine = re = RowEngine(self.plan, row_fields(wk), flat,
-                                                 const_fields(su))
+        if self.plan.row_narrow:        # the narrow engine, and the wide one for the rest
+            m.submodules.row_engine = re = RowPair(self.plan, row_fields(wk), flat)
+        else:
+            m.submodules.row_engine = re = RowEngine(self.plan, row_fields(wk), flat,
+                                                     const_fields(su))
         wiring.connect(m, wk.o, re.i)
         if su.const_fields:
             m.d.comb += [su.consts_index.eq(re.consts_index), re.consts.eq(su.consts)]

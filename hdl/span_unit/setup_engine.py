@@ -117,7 +117,8 @@ def _build(m, plan, i, ready, flat, platform, consts_index):
         coef.update({k: sq.o.payload[k] for k, _ in sq.o.payload.shape()})
         coef.update({k: sq.current[k] for k, _ in sq.current.shape()})
         out.update(valid_next=sq.o_valid_next, busy=sq.pending, end=ss.offset,
-                   current={k: coef[k] for k in walker_constants(ch, flat)})
+                   current={k: coef[k] for k in walker_constants(ch, flat,
+                                                                  narrow=bool(plan.row_narrow))})
     else:
         sc = Schedule(m, "su", Const(1), mults=plan.setup_mults, mux_groups=8,
                       platform=platform, narrow=plan.setup_narrow, share=False)
@@ -129,7 +130,7 @@ def _build(m, plan, i, ready, flat, platform, consts_index):
             m.d.comb += mem["index"].eq(consts_index[:bits])
             out.update(consts=mem["fields"], index_bits=bits)
     out["fields"] = walker_inputs(coef, ch, flat, out["consts"] is not None,
-                                  out["current"] is not None)
+                                  out["current"] is not None, bool(plan.row_narrow))
     return out
 
 
@@ -186,7 +187,8 @@ def _schedule(m, plan, i, space, flat, platform):
     v = sc.inputs(_inputs(m, i), copy=sc.aligned_copy)
     coef = plan.setup.program(sc, v)
     coef.update({k: v[k] for k in flat})
-    writes, offset = queue_writes(sc, coef, walker_constants(len(plan.channels), flat))
+    writes, offset = queue_writes(sc, coef, walker_constants(len(plan.channels), flat,
+                                                             narrow=bool(plan.row_narrow)))
     sc.finish()
     sc.check()
     consts = {k: (x.value, x.shape()) for k, x in coef.items() if isinstance(x, Const)}

@@ -103,8 +103,10 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     FP = w.FO + w.FQ                                     # fraction bits of coefficient x u
     out = {}
     for ch, mode in enumerate(modes):
-        c = {k: v.get(f"c{ch}_{k}") for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0",
-                                              "sphi", "sd")}
+        c = {k: v.get(f"c{ch}_{k}") for k in ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0")}
+        if narrow:                                # the setup's mantissas and shifts
+            c.update({k: v.get(f"c{ch}_n{k}") for k in ("a", "b", "c", "d", "e", "pu", "pv")})
+            c.update({k: v.get(f"c{ch}_{k}") for k in ("sphi", "sd")})
         if narrow:
             uvt, puv = _channel_narrow(sc, narrow, ch, mode, c, u, vv)
         elif mode == "linear":           # t1 = d, t2 = e at FT fraction bits: a shift, no sum
@@ -255,16 +257,17 @@ def _uv(sc, w, v):
 
 def narrow_row_fields(w, M, modes, flat=()):
     """The narrow engine's row fields (``{name: shape}``): the walker's row, the triangle's
-    M-bit reciprocal ``rs`` and its ``sh``, and per channel the M-bit mantissas of a..e (d, e
-    for a linear channel) and of Pu, Pv, f as the wide engine has it, P0 and 2A at FI, and
-    the shift amounts ``sphi``, ``sd`` (``golden.bfp.amounts``)."""
+    M-bit reciprocal ``rsm`` and its ``sh``, and per channel the M-bit mantissas of a..e
+    (``na``..``ne``; d, e for a linear channel) and of Pu, Pv (``npu``, ``npv``), f as the
+    wide engine has it, P0 and 2A at FI, and the shift amounts ``sphi``, ``sd``
+    (``golden.bfp.amounts``)."""
     fields = {"j": unsigned(w.wrow), "tri": unsigned(16), **{k: unsigned(16) for k in flat},
               "xl": signed(w.wi), "xr": signed(w.wi),
               **{k: unsigned(w.wn) for k in ("E_u", "E_v", "B_u", "B_v")},
-              "rs": signed(M), "sh": unsigned(6)}
+              "rsm": signed(M), "sh": unsigned(6)}
     for ch, mode in enumerate(modes):
         keys = ("d", "e") if mode == "linear" else ("a", "b", "c", "d", "e", "pu", "pv")
-        fields.update({f"c{ch}_{k}": signed(M) for k in keys})
+        fields.update({f"c{ch}_n{k}": signed(M) for k in keys})
         fields.update({f"c{ch}_f": signed(OPERAND), f"c{ch}_p0": signed(w.FI + 9),
                        f"c{ch}_a2": signed(w.FI + 9), f"c{ch}_sphi": unsigned(AMOUNT_BITS),
                        f"c{ch}_sd": unsigned(AMOUNT_BITS)})
@@ -294,8 +297,8 @@ def _uv_narrow(sc, w, v, M):
                       for a in "uv"})
     mant = sc.lets(**{f"{a}_m": sat((fine[f"{a}_n2"] + 1) >> 1) for a in "uv"})
     post = lambda p: sat((p + (1 << (M - 3))) >> (M - 2))
-    return (sc.mul("u", mant["u_m"], v["rs"], post=post),
-            sc.mul("v", mant["v_m"], v["rs"], post=post))
+    return (sc.mul("u", mant["u_m"], v["rsm"], post=post),
+            sc.mul("v", mant["v_m"], v["rsm"], post=post))
 
 
 def _channel_narrow(sc, M, ch, mode, c, u, v):

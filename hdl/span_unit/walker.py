@@ -25,7 +25,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..sched import CAPTURE_SHARE as SHARE
 
-__all__ = ["Walker", "walker_constants", "walker_inputs"]
+__all__ = ["Walker", "walker_constants", "walker_inputs", "NARROW_KEYS"]
 
 EDGE = ("i", "r0", "q", "d", "n")             # an edge's DDA as the setup gives it
 TRACKS = ("s0", "s1", "e1", "t0", "t1", "bs", "e0", "b0")   # the numerator tracks' starts, steps
@@ -40,14 +40,20 @@ def _step(i, r, q, d, n):
     return i + q + carry, Mux(carry, r + n, r - d)
 
 
-def walker_constants(channels, flat=(), in_memory=False):
+NARROW_KEYS = ("na", "nb", "nc", "nd", "ne", "npu", "npv", "sphi", "sd")
+
+
+def walker_constants(channels, flat=(), in_memory=False, narrow=False):
     """The triangle's values the walker holds for its rows, unchanged while it walks
-    (``in_memory``: a channel's but 2A are in ``channel_engine``'s memory)."""
+    (``in_memory``: a channel's but 2A are in ``channel_engine``'s memory; ``narrow``: and
+    the narrow row engine's, ``Setup._narrow_channel``)."""
     keys = ("a2",) if in_memory else ("a", "b", "c", "d", "e", "f", "pu", "pv", "p0", "a2")
-    return ["tri", *flat, "rs", "sh"] + [f"c{ch}_{k}" for ch in range(channels) for k in keys]
+    keys += NARROW_KEYS if narrow else ()
+    return (["tri", *flat, "rs", "sh", *(("rsm", "narrow") if narrow else ())]
+            + [f"c{ch}_{k}" for ch in range(channels) for k in keys])
 
 
-def walker_inputs(src, channels, flat=(), in_memory=False, current=False):
+def walker_inputs(src, channels, flat=(), in_memory=False, current=False, narrow=False):
     """What the walker reads of the setup's values ``src``: its control, the edges' DDAs (an
     edge's ``n`` the setup's ``n0`` at the width of its ``n``), the tracks and (unless the
     setup queue holds them, ``current``) the triangle's constants."""
@@ -60,7 +66,7 @@ def walker_inputs(src, channels, flat=(), in_memory=False, current=False):
             out[f"{e}_n"] = out[f"{e}_n"].as_signed()
     out.update({f"{k}_{a}": src[f"{k}_{a}"] for a in "uv" for k in TRACKS})
     if not current:
-        out.update({k: src[k] for k in walker_constants(channels, flat, in_memory)})
+        out.update({k: src[k] for k in walker_constants(channels, flat, in_memory, narrow)})
     return out
 
 
@@ -71,10 +77,13 @@ class Walker(wiring.Component):
     name), else None: the walker holds them; ``in_memory``: a channel's constants but 2A are
     in ``channel_engine``'s memory."""
 
-    def __init__(self, w, channels, inputs, current=None, flat=(), in_memory=False):
+    def __init__(self, w, channels, inputs, current=None, flat=(), in_memory=False,
+                 narrow=False):
         self.w, self.channels, self.flat, self.in_memory = w, channels, tuple(flat), in_memory
+        self.narrow = narrow
         self.in_queue = current is not None
-        consts = current or {k: inputs[k] for k in walker_constants(channels, flat, in_memory)}
+        consts = current or {k: inputs[k] for k in walker_constants(channels, flat, in_memory,
+                                                                    narrow)}
         col = Mux(Signal(), Signal(inputs["l_i"]), Signal(inputs["s_i"])).shape()
         row = {"j": Signal(w.wrow).shape(), "xl": col, "xr": col,
                **{k: Signal(w.wn).shape() for k in ("E_u", "E_v", "B_u", "B_v")}, **consts}
@@ -100,7 +109,8 @@ class Walker(wiring.Component):
         j = Signal(w.wrow)
         to_j1, to_jm = (Signal(signed(w.wrow + 1), name=f"w_{k}") for k in ("to_j1", "to_jm"))
         left_long = Signal()
-        keep = [] if self.in_queue else walker_constants(channels, flat, in_memory)
+        keep = [] if self.in_queue else walker_constants(channels, flat, in_memory,
+                                                         self.narrow)
         held = ({k: self.current[k] for k, _ in self.current.shape()} if self.in_queue else
                 {k: Signal.like(src[k], name=f"w_{k}") for k in keep})
         edge = {}
