@@ -209,3 +209,80 @@ def test_narrow_row_engine_takes_no_wide_multiplier():
     from amaranth.hdl import Fragment
     Fragment.get(dut, None)
     assert dut.t["ii"] == -(-row_products(MODES) // (len(MODES) + 1))
+
+
+def test_the_setups_mantissas_shifts_and_choice_bit_for_bit():
+    """The setup's side of block floating point (``Setup._narrow_channel``): each triangle's
+    exponents, M-bit mantissas of a..e and Pu, Pv, the shifts into FI, the narrow reciprocal
+    and the choice of engine, bit for bit against ``golden.bfp`` applied to the same
+    triangle's wide constants (smooth triangles, mostly narrow, and random ones, mostly
+    wide; both choices must occur)."""
+    import numpy as np
+    from golden import random_triangles
+    from golden.raster import sorted_triangles
+    from hdl.fixed import layout
+    from hdl.setup_unit.formats import triangle_fields
+    from hdl.span_unit.plan import RasterPlan
+    from hdl.span_unit.setup_engine import SetupEngine
+    from .test_raster_rtl import _smooth
+    M, modes = 21, ("linear", "xshading", "exact")
+    plan = RasterPlan.from_params(screen_bits=6, channels=3, modes=",".join(modes),
+                                  row_narrow=M)
+    p, w = plan.params(), plan.setup.w
+    rng = np.random.default_rng(7)
+    tris = [_smooth(rng, 30, p), random_triangles(rng, 30, **p, size=24)]
+    inputs = {k: np.concatenate([t[k] for t in tris]) for k in tris[0]}
+    n = len(inputs["x0"])
+    dut = SetupEngine(plan, layout(triangle_fields(6, p["sub_bits"], 3, 1)))
+    got = []
+
+    async def bench(ctx):
+        ctx.set(dut.o.ready, 1)
+        for t in range(n):
+            ctx.set(dut.i.valid, 1)
+            for k in inputs:
+                ctx.set(getattr(dut.i.payload, k), int(inputs[k][t]))
+            await ctx.tick().until(dut.i.ready)
+        ctx.set(dut.i.valid, 0)
+        for _ in range(400):
+            await ctx.tick()
+
+    async def watch(ctx):
+        async for _, _, valid, *vals in ctx.tick().sample(
+                dut.o.valid, *(getattr(dut.o, k) for k in dut.fields)):
+            if valid:
+                got.append(dict(zip(dut.fields, vals)))
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.add_testbench(watch, background=True)
+    sim.run()
+    st = sorted_triangles(inputs, 3, p["sub_bits"])
+    drawn = [t for t in range(n) if st["x1"][t] * st["y2"][t] != st["x2"][t] * st["y1"][t]]
+    got = [g for g in got if not g["cull"]]
+    assert len(got) == len(drawn)
+    left = narrow_left(w, M)
+    choices = []
+    for t, g in zip(drawn, got):
+        rs = g["rs"]
+        assert g["rsm"] == bfp.rs_mantissa(abs(rs), rs < 0, w.R, M)
+        chans = []
+        for ch, mode in enumerate(modes):
+            linear = mode == "linear"
+            group = ("d", "e") if linear else ("a", "b", "c", "d", "e")
+            e0, mants = bfp.quantised([g[f"c{ch}_{k}"] for k in group], w.FO, M)
+            assert [g[f"c{ch}_n{k}"] for k in group] == mants, (t, ch)
+            e1 = 0
+            if not linear:
+                e1, pm = bfp.quantised([g[f"c{ch}_pu"], g[f"c{ch}_pv"]], w.FO, M)
+                assert [g[f"c{ch}_npu"], g[f"c{ch}_npv"]] == pm, (t, ch)
+            sphi, sd = bfp.amounts(e0, e1, linear, w.FI, M, left)
+            assert g[f"c{ch}_sphi"] == sphi and (linear or g[f"c{ch}_sd"] == sd), (t, ch)
+            chans.append((linear, e0 + w.FO, e1 + w.FO))
+        ly = int(st["y2"][t]).bit_length() - 1
+        want = bfp.choice(M, w.FI, w.FO, w.sub_bits, w.screen_bits, plan.setup.recip_err,
+                          g["sh"], ly, chans)
+        assert g["narrow"] == want, t
+        choices.append(want)
+    assert 0 < sum(choices) < len(choices), sum(choices)
