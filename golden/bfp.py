@@ -9,7 +9,7 @@ fraction bits, the numerators in sub-pixel units squared.
 """
 __all__ = ["exponent", "mantissa", "quantised", "recip_mantissa", "amounts", "row",
            "narrow_bound", "narrow_ok", "other_terms", "rs_mantissa", "choice",
-           "choice_constants", "AMOUNT_BITS", "BUDGET", "UNIT"]
+           "choice_tables", "AMOUNT_BITS", "BUDGET"]
 
 from hdl.span_unit.span import AMOUNT_BITS       # a shift amount into FI, clamped to 2**6 - 1
 
@@ -139,37 +139,47 @@ def narrow_ok(M, FI, channels, n, recip_err=0.0):
     return ok
 
 
-UNIT = 48                  # the setup's choice sums its terms in units of 2**-48
-
-
-def choice_constants(M, FI, recip_err):
-    """The integer constants of the setup's choice (:func:`choice`): Phi's factor on a
-    quadratic and on a linear channel, d's, and the fixed terms and the budget in units of
-    2**-UNIT; each factor rounded up, the budget down."""
+def choice_tables(M, FI, screen_bits, recip_err, linear):
+    """The setup's choice in 64ths of ``BUDGET`` (:func:`choice`), each entry rounded up and
+    65 where the term alone is over: ``start[s0]``, a channel's error at a span's first pixel
+    (:func:`narrow_bound`'s, or a linear channel's) for the group (a..e) of bit length
+    M - 1 + s0; ``steps[s1 + kn]``, its first difference's over 2**kn steps for (Pu, Pv) of
+    bit length M - 1 + s1; ``own[kn]``, :func:`other_terms` and the floors to FI over
+    2**kn steps. e = bit length - FO; FO is ``Widths.FO``'s 28."""
     import math
+    from hdl.setup_unit.setup import Widths
+    FO = Widths.FO
     k = 5 + 2.0 ** (M + 1) * recip_err
     grow = 1 + 2.0 ** -(M - 5)
-    fixed = (2.0 ** -19.7 + 2.0 ** -24 + 2.0 ** -21) * 2.0 ** UNIT
-    return (math.ceil((8 + 6 * k) * grow), math.ceil((2 + 2 * k) * grow),
-            math.ceil((2 + 2 * k) * grow), math.ceil(fixed), math.floor(BUDGET * 2.0 ** UNIT))
+    part = lambda x: min(math.ceil(x / BUDGET * 64), 65)
+    lengths = range(OPERAND_BITS - M + 2)                  # s = bit length - (M - 1)
+    start = [part((2 + 2 * k if linear else 8 + 6 * k) * grow
+                  * 2.0 ** (s + M - 1 - FO - M)) for s in lengths]
+    steps = [part((2 + 2 * k) * grow * 2.0 ** (s + M - 1 - FO - M)) for s in
+             range(len(lengths) + screen_bits + 1)]
+    own = [part(other_terms(2 ** kn) + (2 + 2 * 2 ** kn) * 2.0 ** -FI)
+           for kn in range(screen_bits + 1)]
+    return start, steps, own
+
+
+OPERAND_BITS = 35          # the setup's operands (``hdl.sched.OPERAND``)
 
 
 def choice(M, FI, FO, sub_bits, screen_bits, recip_err, sh, ly, channels):
-    """The setup's choice of the narrow engine for a triangle, as its RTL makes it, in
-    integers: :func:`narrow_ok` with n bounded by 2**kn (|Omega| < 2**(sh+1), y2 >=
-    2**ly sub-pixel units, so the widest chord W < 2**(sh+1-ly-sub_bits) pixels, and a span
-    at most 2**screen_bits), n (n - 1) / 2 by 2**(2 kn - 1), and each factor rounded up.
-    ``channels``: per channel (linear, bl0, bl1), the groups' clamped bit lengths (e0 =
-    bl0 - FO). True where every channel's sum is within the budget."""
-    cp, cl, cd, fixed, budget = choice_constants(M, FI, recip_err)
+    """The setup's choice of the narrow engine for a triangle, as its RTL makes it:
+    :func:`narrow_ok` with n bounded by 2**kn (|Omega| < 2**(sh+1), y2 >= 2**ly sub-pixel
+    units, so the widest chord W < 2**(sh+1-ly-sub_bits) pixels, and a span at most
+    2**screen_bits), n (n - 1) / 2 by 2**(2 kn - 1), and each term rounded up to a 64th of
+    the budget (:func:`choice_tables`). ``channels``: per channel (linear, bl0, bl1), the
+    groups' clamped bit lengths (e0 = bl0 - FO). True where every channel's sum is within
+    the budget."""
     kn = min(max(sh + 1 - ly - sub_bits, 0), screen_bits)
-    common = ((168 << (kn + UNIT - 34)) + (1 << (2 * kn + UNIT - 37))
-              + ((2 << (UNIT - FI)) << kn) + (2 << (UNIT - FI)) + fixed)
     for linear, bl0, bl1 in channels:
-        total = common + ((cl if linear else cp) << (bl0 + UNIT - FO - M))
+        start, steps, own = choice_tables(M, FI, screen_bits, recip_err, linear)
+        total = start[bl0 - (M - 1)] + own[kn]
         if not linear:
-            total += cd << (bl1 + UNIT - FO - M + kn)
-        if total > budget:
+            total += steps[bl1 - (M - 1) + kn]
+        if total > 64:
             return False
     return True
 

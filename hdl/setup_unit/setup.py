@@ -18,7 +18,7 @@ from amaranth.hdl import Const, signed
 
 from .. import arith
 from ..fixed import Field, s, u
-from ..sched import OPERAND, Schedule
+from ..sched import OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, Term, term
 from .formats import EXACT_G_MAX, VALUE, coord, edge_names, parse_groups, parse_modes
 
@@ -332,11 +332,13 @@ class Setup:
         """One channel's constants for the narrow row engine (issue 49's block floating
         point, ``golden.bfp``): the exponents of (a..e) and of (Pu, Pv) from the bit length of
         the OR of their one's-complement magnitudes (at least M - 1), the M-bit mantissas
-        (each value shifted right by its group's bit length less M - 1, floored), the shifts
-        of the engine's products into FI (``sphi``, ``sd``), and whether the channel's
-        derived bound on this triangle is within the raster's budget (``golden.bfp.choice``,
-        in units of 2**-UNIT)."""
-        from golden.bfp import UNIT, choice_constants
+        (each value times 2**(33 - s) on the setup's multiplier, then its top bits: x floored
+        by s, the group's bit length less M - 1; a shifter each would cost 200 LUT4), the
+        shifts of the engine's products into FI (``sphi``, ``sd``), and whether the channel's
+        derived bound on this triangle is within the raster's budget: three small tables
+        (its start, its steps, the setup's own terms) in 64ths of the budget, summed
+        (``golden.bfp.choice``)."""
+        from golden.bfp import choice_tables
         from ..span_unit.span import narrow_left
         M, w, n = self.narrow, self.w, f"c{ch}"
         FO, W = w.FO, OPERAND
@@ -348,33 +350,32 @@ class Setup:
                 continue
             top = sc.let(f"{n}_or{g}", _or([ones(span[k]).as_unsigned() for k in names]))
             pos = sc.let(f"{n}_lo{g}", Term.call(arith.leading_one, top, len(top)))
-            # bit length (pos + 1, or 0 for 0), at least M - 1
-            bl = sc.let(f"{n}_bl{g}", Mux(top.any() & (pos >= M - 1), pos + 1, M - 1),
-                        shape=range(W + 1))
-            bits[g] = bl
-            amount = sc.let(f"{n}_s{g}", bl - (M - 1), shape=range(W + 1))
-            sc_ = sc.lets(**{f"{n}_n{k}": (span[k] >> amount)[:M].as_signed() for k in names})
-            bits.update({k: sc_[f"{n}_n{k}"] for k in names})
+            # the bit length less M - 1 (pos + 1, or 0 for 0; at least M - 1)
+            s_ = sc.let(f"{n}_s{g}", Mux(top.any() & (pos >= M - 1), pos + 2 - M, 0),
+                        shape=range(W - M + 2))
+            bits[g] = s_
+            scale = sc.let(f"{n}_p{g}", term(Const(1 << 33, signed(W))) >> s_)
+            for k in names:
+                bits[k] = sc.mul(f"{n}_n{k}", span[k], scale,
+                                 post=lambda p: (p >> 33)[:M].as_signed())
         left = narrow_left(w, M)
-        c_phi = left - w.FI + 2 * M + FO - (2 if linear else 4)
+        c_phi = left - w.FI + 2 * M + FO - (2 if linear else 4) - (M - 1)
         fields = {f"{n}_n{k}": bits[k] for k in group + (() if linear else ("pu", "pv"))}
         if linear:                              # a = b = c = 0: nothing stored or carried
             fields.update({f"{n}_n{k}": Const(0, 1) for k in ("a", "b", "c", "pu", "pv")},
                           **{f"{n}_sd": Const(0, 1)})
         fields[f"{n}_sphi"] = sc.let(f"{n}_sphi", (c_phi - bits["0"])[:6], shape=6)
         if not linear:
-            fields[f"{n}_sd"] = sc.let(f"{n}_sd", (left - w.FI + 2 * M + FO - 2 - bits["1"])[:6],
-                                       shape=6)
-        cp, cl, cd, fixed, budget = choice_constants(M, w.FI, self.recip_err)
-        common = ((term(Const(168, 8)) << (kn + (UNIT - 34)))
-                  + (term(Const(1, 1)) << (2 * kn + (UNIT - 37)))
-                  + (term(Const(2 << (UNIT - w.FI), UNIT)) << kn)
-                  + ((2 << (UNIT - w.FI)) + fixed))
-        total = common + (term(Const(cl if linear else cp, 8))
-                          << (bits["0"] + UNIT - FO - M).as_unsigned())
+            c_d = left - w.FI + 2 * M + FO - 2 - (M - 1)
+            fields[f"{n}_sd"] = sc.let(f"{n}_sd", (c_d - bits["1"])[:6], shape=6)
+        start, steps, own = choice_tables(M, w.FI, w.screen_bits, self.recip_err, linear)
+        look = lambda values, i: _or_tree([Mux(i == k, v, 0) for k, v in enumerate(values)
+                                           if v])
+        parts = {f"{n}_cp": look(start, bits["0"]), f"{n}_ck": look(own, kn)}
         if not linear:
-            total = total + (term(Const(cd, 8)) << (bits["1"] + UNIT - FO - M + kn).as_unsigned())
-        ok = sc.let(f"{n}_ok", total <= budget)
+            parts[f"{n}_cd"] = look(steps, bits["1"] + kn)
+        parts = sc.lets(**parts)
+        ok = sc.let(f"{n}_ok", sum(parts.values(), term(Const(0, 9))) <= 64)
         return fields, ok
 
     @property
