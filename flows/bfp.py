@@ -202,26 +202,36 @@ def blocks(inputs, m, screen_bits, sub_bits, modes, rate, recip=False):
 
 def built_share(inputs, m, screen_bits, sub_bits, modes):
     """The narrow engine as built (``span.row_engine(narrow=m)``): per triangle drawn, whether
-    the setup would choose it (``golden.bfp.narrow_ok``: its derived bound, with the setup's
-    own terms, within the raster's budget); returns the share of triangles drawn and of their
-    rows."""
-    from golden.bfp import narrow_ok
+    the setup chooses it (``golden.bfp.choice``: its derived bound, with the setup's own
+    terms, within the raster's budget, from the bit lengths of its constants, of |Omega| and
+    of y2), here from the float model's constants at the setup's 28 fraction bits; returns
+    the share of triangles drawn and of their rows."""
+    from golden.bfp import choice_tables
+    from hdl.setup_unit.setup import Widths
+    FO = Widths.FO
     x, y = R._vertices(inputs)
     tri, _, py = R.coverage(x, y, sub_bits, screen_bits)
     st = R.sorted_triangles(inputs, len(modes), sub_bits)
     with np.errstate(divide="ignore", invalid="ignore"):
         omega = q.omega(st["x1"], st["y1"], st["x2"], st["y2"])
         ux, vx = st["y2"] / omega, -st["y1"] / omega
-        n = np.floor(np.nan_to_num(np.abs(omega) / st["y2"], nan=0.0, posinf=0.0))
-    n = np.minimum(n, (1 << screen_bits) - 1)
-    chans = []
+        log2 = lambda v: np.floor(np.log2(np.maximum(np.abs(v), 1)))
+        kn = np.clip(log2(omega) + 1 - log2(st["y2"]) - sub_bits, 0, screen_bits)
+    kn = np.nan_to_num(kn).astype(int)
+    ok = np.ones(len(omega), bool)
     for ch, mode in enumerate(modes):
         I = [st["values"][ch][:, k] for k in range(3)]
         a, b, c, d, e, _ = R.channel_uv(mode, I, st["e"]).T
         with np.errstate(invalid="ignore"):
             Pu, Pv = 2 * a * ux + c * vx, 2 * b * vx + c * ux
-        chans.append((mode == "linear", _exp(a, b, c, d, e), _exp(Pu, Pv)))
-    ok = narrow_ok(m, 2 * screen_bits + 20, chans, n)
+        start, steps, own = choice_tables(m, 2 * screen_bits + 20, screen_bits, 7.2e-9,
+                                          mode == "linear")
+        s0, s1 = ((np.nan_to_num(_exp(*g)) + FO - (m - 1)).clip(0, None).astype(int)
+                  for g in ((a, b, c, d, e), (Pu, Pv)))
+        total = np.take(start, s0.clip(0, len(start) - 1)) + np.take(own, kn)
+        if mode != "linear":
+            total = total + np.take(steps, (s1 + kn).clip(0, len(steps) - 1))
+        ok &= total <= 64
     drawn = np.unique(tri)
     rows = np.unique(tri.astype(np.int64) * (2 << screen_bits) + py) // (2 << screen_bits)
     return ok[drawn].mean(), ok[rows].mean()

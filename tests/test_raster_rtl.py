@@ -221,7 +221,8 @@ def _smooth(rng, n, p):
     return t
 
 
-@pytest.mark.parametrize("modes", ["linear,xshading,xshading", "exact,xshading"])
+@pytest.mark.parametrize("modes", ["linear,xshading,xshading",      # the default scene's
+                                   pytest.param("exact,xshading", marks=pytest.mark.long)])
 def test_narrow_row_engine_keeps_the_contract(modes):
     """``row_narrow=21``: block floating point (docs/quadratic.md, "The narrow row engine"):
     the setup chooses per triangle, from its derived bound, the narrow engine (21-bit
@@ -384,6 +385,10 @@ def test_property_no_triangle_breaks_the_bound(rows, modes):
     ({"row_mults": 2, "row_serial": 3}, "row_mults=2 and row_serial=3: the row engine is one"),
     ({"row_serial": 10}, "row_serial must be in 0..9"),
     ({"setup_serial": 1}, "setup_serial=1 needs row_serial > 0"),
+    ({"row_narrow": 10}, "row_narrow=10: mantissas of 18 to 24 bits, with the channels together"),
+    ({"row_narrow": 25}, "row_narrow must be in 0..24"),
+    ({"row_narrow": 21, "row_serial": 3}, "row_narrow=21: mantissas of 18 to 24 bits, with the "
+                                          "channels together (row_serial=0, setup_serial=0)"),
     ({"setup_serial": 1, "row_serial": 3, "modes": "exact,linear"},
      "setup_serial=1 needs row_serial > 0 (its jobs read the channels' constants in turn), "
      "setup_ii=0 and no exact channel"),

@@ -212,7 +212,7 @@ class RasterPlan:
         (its program on a schedule of its own)."""
         p = self.params()
         return _products(self.screen_bits, self.sub_bits, len(self.channels), p["modes"],
-                         self.recip, self.recip_iters, p["groups"])
+                         self.recip, self.recip_iters, p["groups"], self.row_narrow)
 
 
 @functools.lru_cache(maxsize=None)
