@@ -153,6 +153,13 @@ def configurations(quick=False, knobs=None):
         hw = {"row_serial": 3, "setup_serial": n}
         rows.append(_row("setup channels", f"in turn, {n} multiplier{'s' * (n > 1)} (row 3)",
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw)))
+    # block floating point (issue 49): the narrow row engine's mantissa bits, the wide
+    # engine for the triangles its derived bound cannot hold (docs/quadratic.md)
+    for n in (0, 18, 20, 21, 22):
+        hw = {"row_narrow": n} if n else {}
+        rows.append(_row("row mantissa bits", f"{n} (narrow engine)" if n else "wide only",
+                         raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
+                         default=n == 0))
     # each stage's own rows (Stage.sweeps): its units' settings, in the stages' order
     sweeps = [sw for cls in STAGES for sw in cls.sweeps()]
     if quick:       # no raster: a few minutes
