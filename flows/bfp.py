@@ -206,7 +206,7 @@ def built_share(inputs, m, screen_bits, sub_bits, modes):
     terms, within the raster's budget, from the bit lengths of its constants, of |Omega| and
     of y2), here from the float model's constants at the setup's 28 fraction bits; returns
     the share of triangles drawn and of their rows."""
-    from golden.bfp import choice_tables
+    from hdl.setup_unit.choice import choice_tables
     from hdl.setup_unit.setup import Widths
     FO = Widths.FO
     x, y = R._vertices(inputs)
@@ -224,7 +224,7 @@ def built_share(inputs, m, screen_bits, sub_bits, modes):
         a, b, c, d, e, _ = R.channel_uv(mode, I, st["e"]).T
         with np.errstate(invalid="ignore"):
             Pu, Pv = 2 * a * ux + c * vx, 2 * b * vx + c * ux
-        start, steps, own = choice_tables(m, 2 * screen_bits + 20, screen_bits, 7.2e-9,
+        start, steps, own = choice_tables(m, 2 * screen_bits + 20, FO, screen_bits, 7.2e-9,
                                           mode == "linear")
         s0, s1 = ((np.nan_to_num(_exp(*g)) + FO - (m - 1)).clip(0, None).astype(int)
                   for g in ((a, b, c, d, e), (Pu, Pv)))

@@ -84,6 +84,8 @@ from amaranth.back import verilog
 from amaranth.hdl import Fragment
 from amaranth.lib import data
 
+from hdl.dsp import soft_as_mul
+
 from .sby import COUNT, OUT, keep_only, run_sby
 
 PROVE_DEPTH = 8          # k of the proofs
@@ -95,12 +97,14 @@ SLOTS = 4                # the reference's rows owing fragments: the row in the 
 RASTER = {"screen_bits": 4, "channels": 1}
 TAG = 5                  # the queues' tags: counts modulo 32, twice their 16 words
 SETUP_II = 48            # the setup queue's raster: a triangle every 48 clocks
+NARROW = 21              # the narrow row engine's mantissa bits
 # parts on a schedule of products (the setup, the row engines): the products are free
 # values, since no property reads one; a mutant shows once an item has been through (the
 # clocks given here, and 5 more), a cover of two items out after two
 SCHEDULED = {"setup": lambda part: part.end + 1,
              "row_engine": lambda part: part.offset,
              "row_engine_serial": lambda part: part.offset,
+             "row_engine_narrow": lambda part: part.offset,
              "setup_schedule": lambda part: part.offset}
 
 MUTANTS = {   # name: (what it breaks, the property that must catch it)
@@ -141,8 +145,10 @@ def row_queue(serial=False):
 
 @functools.lru_cache(maxsize=8)
 def export(part, module):
-    """The part's Verilog (once per part and name: every check of a part runs on it)."""
-    return verilog.convert(part, name=module, emit_src=False)
+    """The part's Verilog (once per part and name: every check of a part runs on it); soft
+    products (the narrow multipliers' low bits) as ``$mul``, so that they are cut too."""
+    with soft_as_mul():
+        return verilog.convert(part, name=module, emit_src=False)
 
 
 def _fields(layout):
@@ -707,6 +713,12 @@ def row_engine(serial=False):
     return _raster(**({"row_serial": 1} if serial else {})).submodules.row_engine
 
 
+def row_engine_narrow():
+    """The narrow row engine (block floating point) as the raster builds it with
+    ``row_narrow=NARROW``: the same schedule, on M-bit multipliers and their shifters."""
+    return _raster(row_narrow=NARROW).submodules.row_engine.narrow
+
+
 def setup_schedule():
     """The overlapped setup's schedule (``SetupSchedule``, the setup queue's producer) as the
     raster builds it with ``setup_ii=SETUP_II``."""
@@ -936,6 +948,7 @@ PARTS = {
                           row_engine_wires, (*ENGINE, "wrong_slot")),
     "setup_schedule": (setup_schedule, row_engine_harness, row_engine_wires,
                        (*ENGINE, "wrong_slot")),
+    "row_engine_narrow": (row_engine_narrow, row_engine_harness, row_engine_wires, ENGINE),
 }
 
 

@@ -11,6 +11,7 @@ __all__ = ["exponent", "mantissa", "quantised", "recip_mantissa", "amounts", "ro
            "narrow_bound", "narrow_ok", "other_terms", "rs_mantissa", "choice",
            "choice_tables", "AMOUNT_BITS", "BUDGET"]
 
+from hdl.setup_unit.choice import BUDGET, choice_tables, other_terms
 from hdl.span_unit.span import AMOUNT_BITS       # a shift amount into FI, clamped to 2**6 - 1
 
 
@@ -110,19 +111,6 @@ def narrow_bound(M, e0, e1, FI, recip_err=0.0):
             (2 + 2 * k) * 2.0 ** (e1 - M) * grow + floors)
 
 
-BUDGET = 2.0 ** -15.37     # the raster's arithmetic, all terms (docs/quadratic.md, "Widths")
-
-
-def other_terms(n):
-    """What the setup's fixed-point arithmetic spends on a triangle whose spans step at most
-    ``n`` times, beside the row engine's (docs/quadratic.md, "Widths from analysis", terms
-    1, 4, 6 and 7 and the floors to FI, at G = 168): the reciprocal's 2**-19.7, alpha floored
-    to 2**-34 n G, 2A's floors summed twice n (n - 1) / 2 2**-36, the exact mid-edges'
-    2**-24 and the FI floors' 2**-21."""
-    return (2.0 ** -19.7 + 2.0 ** -24 + 2.0 ** -21 + n * 168 * 2.0 ** -34
-            + n * (n - 1) / 2 * 2.0 ** -36)
-
-
 def narrow_ok(M, FI, channels, n, recip_err=0.0):
     """The narrow engine's errors on a triangle within ``BUDGET`` (:func:`narrow_bound` after
     ``n`` steps, and :func:`other_terms`), so that the raster's bound of 2**-(p+1) +
@@ -139,35 +127,10 @@ def narrow_ok(M, FI, channels, n, recip_err=0.0):
     return ok
 
 
-def choice_tables(M, FI, screen_bits, recip_err, linear):
-    """The setup's choice in 64ths of ``BUDGET`` (:func:`choice`), each entry rounded up and
-    65 where the term alone is over: ``start[s0]``, a channel's error at a span's first pixel
-    (:func:`narrow_bound`'s, or a linear channel's) for the group (a..e) of bit length
-    M - 1 + s0; ``steps[s1 + kn]``, its first difference's over 2**kn steps for (Pu, Pv) of
-    bit length M - 1 + s1; ``own[kn]``, :func:`other_terms` and the floors to FI over
-    2**kn steps. e = bit length - FO; FO is ``Widths.FO``'s 28."""
-    import math
-    from hdl.setup_unit.setup import Widths
-    FO = Widths.FO
-    k = 5 + 2.0 ** (M + 1) * recip_err
-    grow = 1 + 2.0 ** -(M - 5)
-    part = lambda x: min(math.ceil(x / BUDGET * 64), 65)
-    lengths = range(OPERAND_BITS - M + 2)                  # s = bit length - (M - 1)
-    start = [part((2 + 2 * k if linear else 8 + 6 * k) * grow
-                  * 2.0 ** (s + M - 1 - FO - M)) for s in lengths]
-    steps = [part((2 + 2 * k) * grow * 2.0 ** (s + M - 1 - FO - M)) for s in
-             range(len(lengths) + screen_bits + 1)]
-    own = [part(other_terms(2 ** kn) + (2 + 2 * 2 ** kn) * 2.0 ** -FI)
-           for kn in range(screen_bits + 1)]
-    return start, steps, own
-
-
-OPERAND_BITS = 35          # the setup's operands (``hdl.sched.OPERAND``)
-
-
 def choice(M, FI, FO, sub_bits, screen_bits, recip_err, sh, ly, channels):
-    """The setup's choice of the narrow engine for a triangle, as its RTL makes it:
-    :func:`narrow_ok` with n bounded by 2**kn (|Omega| < 2**(sh+1), y2 >= 2**ly sub-pixel
+    """The setup's choice of the narrow engine for a triangle, as its RTL makes it from its
+    tables (``hdl.setup_unit.choice``; ``tests/test_row_narrow.py`` holds them to
+    :func:`narrow_ok`): :func:`narrow_ok` with n bounded by 2**kn (|Omega| < 2**(sh+1), y2 >= 2**ly sub-pixel
     units, so the widest chord W < 2**(sh+1-ly-sub_bits) pixels, and a span at most
     2**screen_bits), n (n - 1) / 2 by 2**(2 kn - 1), and each term rounded up to a 64th of
     the budget (:func:`choice_tables`). ``channels``: per channel (linear, bl0, bl1), the
@@ -175,7 +138,7 @@ def choice(M, FI, FO, sub_bits, screen_bits, recip_err, sh, ly, channels):
     the budget."""
     kn = min(max(sh + 1 - ly - sub_bits, 0), screen_bits)
     for linear, bl0, bl1 in channels:
-        start, steps, own = choice_tables(M, FI, screen_bits, recip_err, linear)
+        start, steps, own = choice_tables(M, FI, FO, screen_bits, recip_err, linear)
         total = start[bl0 - (M - 1)] + own[kn]
         if not linear:
             total += steps[bl1 - (M - 1) + kn]

@@ -286,3 +286,26 @@ def test_the_setups_mantissas_shifts_and_choice_bit_for_bit():
         assert g["narrow"] == want, t
         choices.append(want)
     assert 0 < sum(choices) < len(choices), sum(choices)
+
+
+@pytest.mark.parametrize("M", [18, 21, 24])
+def test_the_choice_tables_keep_the_derived_bound(M):
+    """Every sum the setup's tables allow (``hdl.setup_unit.choice``: each channel's start,
+    its steps and the setup's own terms, in 64ths of the budget) is within the budget by the
+    float bound (``golden.bfp.narrow_ok``, n = 2**kn steps), for every bit length and kn; and
+    the tables are not empty (the default torus's exponents pass)."""
+    from hdl.setup_unit.choice import choice_tables
+    w = Widths(10, 4)
+    for linear in (False, True):
+        start, steps, own = choice_tables(M, w.FI, w.FO, w.screen_bits, 7.2e-9, linear)
+        allowed = 0
+        for s0 in range(len(start)):
+            for kn in range(len(own)):
+                for s1 in range(len(steps) - kn):
+                    if start[s0] + own[kn] + (0 if linear else steps[s1 + kn]) > 64:
+                        continue
+                    allowed += 1
+                    e0, e1 = s0 + M - 1 - w.FO, s1 + M - 1 - w.FO
+                    assert bfp.narrow_ok(M, w.FI, [(linear, e0, e1)], 2 ** kn, 7.2e-9), \
+                        (linear, s0, s1, kn)
+        assert allowed > 0

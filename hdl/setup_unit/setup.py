@@ -338,8 +338,8 @@ class Setup:
         derived bound on this triangle is within the raster's budget: three small tables
         (its start, its steps, the setup's own terms) in 64ths of the budget, summed
         (``golden.bfp.choice``)."""
-        from golden.bfp import choice_tables
         from ..span_unit.span import narrow_left
+        from .choice import choice_tables
         M, w, n = self.narrow, self.w, f"c{ch}"
         FO, W = w.FO, OPERAND
         group = ("d", "e") if linear else ("a", "b", "c", "d", "e")
@@ -368,7 +368,8 @@ class Setup:
         if not linear:
             c_d = left - w.FI + 2 * M + FO - 2 - (M - 1)
             fields[f"{n}_sd"] = sc.let(f"{n}_sd", (c_d - bits["1"])[:6], shape=6)
-        start, steps, own = choice_tables(M, w.FI, w.screen_bits, self.recip_err, linear)
+        start, steps, own = choice_tables(M, w.FI, FO, w.screen_bits, self.recip_err,
+                                          linear)
         look = lambda values, i: _or_tree([Mux(i == k, v, 0) for k, v in enumerate(values)
                                            if v])
         parts = {f"{n}_cp": look(start, bits["0"]), f"{n}_ck": look(own, kn)}
