@@ -4,10 +4,12 @@ block floating point (products of M-bit mantissas, one MULT18X18D each: ``span.r
 with ``narrow=M``), at 3 and 9 X-shading channels, each on channels + 1 multipliers (a row
 every 5 clocks at 3 channels). The engine alone (``RowEngine``), its row fields in and its
 row-queue writes out as ports: the wide one's fields as the default raster's walker gives
-them, the narrow one's as its setup would (``span.narrow_row_fields``). A further channel
-costs the difference between 9 and 3 channels over 6.
+them, the narrow one's as its setup would (``span.narrow_row_fields``). Then the whole
+raster (the default scene's: a linear channel, then X-shading ones) at 3 and 9 channels,
+wide and with ``row_narrow=21`` (``flows.fpga.synthesise``, its wrapper's cells left out).
+A further channel costs the difference between 9 and 3 channels over 6.
 
-    python -m flows.engine_cost      (about 5 minutes: six syntheses, one at a time)
+    python -m flows.engine_cost      (about 10 minutes: 14 syntheses, one at a time)
 """
 import json
 
@@ -19,7 +21,7 @@ from hdl.span_unit.setup_engine import SetupEngine
 from hdl.span_unit.walker import Walker
 from hdl.span_unit.span import narrow_row_fields
 
-from .fpga import OUT, _run, tool
+from .fpga import OUT, _run, synthesise, tool
 
 CHANNELS = (3, 9)
 FORMS = (("wide (today)", None), *((f"narrow, M = {m}", m) for m in (22, 21, 20, 18)))
@@ -55,16 +57,33 @@ def measure(channels, narrow):
             "FF": cells.get("TRELLIS_FF", 0), "s": round(seconds)}
 
 
-def main():
-    print("| row engine | " + " | ".join(f"{c} channels: {', '.join(COLUMNS)}"
-                                         for c in CHANNELS) + " | a further channel |")
+def raster(channels, narrow):
+    """Synthesis of the default scene's raster at ``channels``: ``{column: cells}``."""
+    params = {"screen_bits": 8, "channels": channels,
+              "modes": ",".join(["linear"] + ["xshading"] * (channels - 1)),
+              **({"row_narrow": narrow} if narrow else {})}
+    _, s = synthesise(f"raster-{narrow or 'wide'}-{channels}", "raster", params, "ecp5")
+    c = s["core_cells"]
+    return {"MULT18X18D": c.get("MULT18X18D", 0), "LUT4": c.get("LUT4", 0) + 2 * c.get("CCU2C", 0),
+            "FF": c.get("TRELLIS_FF", 0)}
+
+
+def _table(title, forms, measure_one):
+    print(f"| {title} | " + " | ".join(f"{c} channels: {', '.join(COLUMNS)}"
+                                      for c in CHANNELS) + " | a further channel |")
     print("| --- | " + " | ".join("---" for _ in CHANNELS) + " | --- |")
-    for label, narrow in FORMS:
-        got = [measure(c, narrow) for c in CHANNELS]
+    for label, narrow in forms:
+        got = [measure_one(c, narrow) for c in CHANNELS]
         per = {k: (got[1][k] - got[0][k]) / (CHANNELS[1] - CHANNELS[0]) for k in COLUMNS}
         print(f"| {label} | " + " | ".join(", ".join(f"{g[k]:,}" for k in COLUMNS)
                                            for g in got)
               + " | " + ", ".join(f"{per[k]:,.0f}" for k in COLUMNS) + " |", flush=True)
+
+
+def main():
+    _table("row engine", FORMS, measure)
+    print()
+    _table("raster", (("wide (today)", None), ("row_narrow=21", 21)), raster)
 
 
 if __name__ == "__main__":
