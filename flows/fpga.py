@@ -124,12 +124,14 @@ class SerialWrapper(wiring.Component):
 
 def designs(names, texture="onchip", raster=None):
     """``[(label, unit name, params)]``: the units, then the scenes' pipelines ("scene": the
-    default scene's; "scene_<name>": ``scenes/<name>.toml``'s), in their board form, built
-    with the raster knobs ``raster`` (``sim render --raster``'s; the label names them)."""
+    default scene's; "scene_<name>": ``scenes/<name>.toml``'s), in their board form; the
+    raster unit and the pipelines built with the raster knobs ``raster`` (``sim render
+    --raster``'s; the label names them)."""
     from scene.driver import load, pipeline_params
     from scene.stages.texture import board_form
-    out = [(n, n, {}) for n in names if n in UNITS]
     tag = "".join(f"-{k}{v}" for k, v in (raster or {}).items())
+    out = [(n + tag, n, dict(raster or {})) if n == "raster" else (n, n, {})
+           for n in names if n in UNITS]
     for n in names:
         if n == "scene" or n.startswith("scene_"):
             path = SCENE if n == "scene" else SCENES / f"{n[len('scene_'):]}.toml"
@@ -362,8 +364,9 @@ def main(argv=None):
     ap.add_argument("--texture", choices=("onchip", "external"), default="onchip",
                     help="bump pipelines: the texture RAM on chip (default, at most 128 x 128) "
                          "or the external memory port")
-    ap.add_argument("--raster", help="the scene pipelines' raster knobs, as sim render's: "
-                                     "row_serial=2,setup_serial=1 (docs/quadratic.md)")
+    ap.add_argument("--raster", help="the raster's knobs (the raster unit's, and the scene "
+                                     "pipelines'), as sim render's: row_serial=2,setup_serial=1 "
+                                     "(docs/quadratic.md)")
     args = ap.parse_args(argv)
     with user_errors():
         names = unit_names(args.units, {**UNITS, "scene": None,
@@ -376,9 +379,10 @@ def main(argv=None):
         if args.seeds < 1:
             raise UsageError("--seeds must be at least 1")
         raster = raster_knobs(args.raster)
-        if raster and not any(n == "scene" or n.startswith("scene_") for n in names):
-            raise UsageError("--raster: the knobs are the scene pipelines'; name one in --units "
-                             "(scene, scene_<name>)")
+        if raster and not any(n in ("scene", "raster") or n.startswith("scene_")
+                              for n in names):
+            raise UsageError("--raster: the knobs are the raster's and the scene pipelines'; "
+                             "name one in --units (raster, scene, scene_<name>)")
         for _, name, params in designs(names, args.texture, raster):
             make_unit(name, spec=True, **params)          # the knobs' ranges, before any run
         rows = run(names, devices, args.seeds, args.jobs, texture=args.texture, raster=raster)

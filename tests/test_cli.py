@@ -300,7 +300,9 @@ def test_render_raster_knobs_are_checked(arg, message, tmp_path):
 @pytest.mark.parametrize("args,message", [
     (["--units", "scene_bump_xz", "--raster", "row_serial=2,row_mults=2"],
      "row_mults=2 and row_serial=2: the row engine is one"),
-    (["--units", "raster", "--raster", "row_serial=2"], "the knobs are the scene pipelines'"),
+    (["--units", "colour", "--raster", "row_serial=2"],
+     "the knobs are the raster's and the scene pipelines'"),
+    (["--units", "raster", "--raster", "row_narrow=30"], "row_narrow must be in 0..24"),
     (["--units", "scene", "--raster", "row_serial=x"], "row_serial must be a whole number")])
 def test_fpga_raster_knobs_are_checked(args, message):
     """``python -m flows.fpga --raster`` (``make fpga RASTER=``): checked before any synthesis,
