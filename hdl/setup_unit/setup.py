@@ -349,10 +349,12 @@ class Setup:
             if not names:
                 continue
             top = sc.let(f"{n}_or{g}", _or([ones(span[k]).as_unsigned() for k in names]))
-            pos = sc.let(f"{n}_lo{g}", Term.call(arith.leading_one, top, len(top)))
-            # the bit length less M - 1 (pos + 1, or 0 for 0; at least M - 1)
-            s_ = sc.let(f"{n}_s{g}", Mux(top.any() & (pos >= M - 1), pos + 2 - M, 0),
-                        shape=range(W - M + 2))
+            # the bit length less M - 1, at least 0: only the bits from M - 1 up count, so
+            # the leading one is found among those (a 35-bit chain of the search was the
+            # narrow raster's critical path, 8.7 ns)
+            high = top[M - 1:]
+            pos = sc.let(f"{n}_lo{g}", Term.call(arith.leading_one, high, len(high)))
+            s_ = sc.let(f"{n}_s{g}", Mux(high.any(), pos + 1, 0), shape=range(W - M + 2))
             bits[g] = s_
             scale = sc.let(f"{n}_p{g}", term(Const(1 << 33, signed(W))) >> s_)
             for k in names:
