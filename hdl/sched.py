@@ -7,6 +7,8 @@ start pulse, so several jobs may be in flight. With ``ii``, jobs start only on e
 clock (``aligned``, a free-running count), the multipliers are reserved modulo ``ii``, and a
 register read more than ``ii`` offsets after it was written is read from a copy (``late``),
 so the next job never overwrites a value before its last read (:meth:`Schedule.check`);
+with ``ram_copies``, a value that would take two copies or more is read instead from a
+16-deep LUT RAM written as it lands, at the job's slot (:meth:`Schedule._ram_copy`);
 a division takes ``ceil((q_bits + 1) / ii)`` dividers in turn. The copies of one
 multiplier's products share registers where their lives (write to last read) do not
 overlap (:meth:`Schedule._pool`): a copy is the product's sum register, so a shared one needs
@@ -22,6 +24,7 @@ the result is written at ``issue + MUL_LAT`` (one more with ``mux_groups``) and 
 clock later.
 """
 from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
+from amaranth.lib.memory import Memory
 
 from .bram import table_slice
 from .dsp import mult18, mult_narrow
@@ -76,7 +79,8 @@ class _Regs:
 
 class Schedule:
     def __init__(self, m, name, en, ii=None, mults=1, shift=None, mux_groups=None,
-                 platform=None, narrow=0, host=None, share=True, narrow_bits=NARROW):
+                 platform=None, narrow=0, host=None, share=True, narrow_bits=NARROW,
+                 ram_copies=False):
         """``shift = (amount, left)``: products asked for ``shifted`` come out as
         ``(a * b << left) >> amount``, two clocks later (one two-stage shifter per multiplier
         that has such products; ``amount`` must be steady over the job). ``platform``: the
@@ -89,7 +93,9 @@ class Schedule:
         first: this one's operands join that multiplier's multiplexer, and its products come
         from that sum register. Finish this one first; the caller keeps their products apart
         in time (this one's jobs run only while the host issues none). ``share=False``: each
-        product copy keeps a register of its own (:meth:`_pool`)."""
+        product copy keeps a register of its own (:meth:`_pool`). ``ram_copies`` (with
+        ``ii``): values read two copies or more after their write come from LUT RAM
+        (:meth:`_ram_copy`), not from chains of registers."""
         self.m, self.name, self.en, self.ii, self.shift = m, name, en, ii, shift
         self.platform = platform
         # with many operations per multiplier: the operand multiplexer in two registered
@@ -109,6 +115,7 @@ class Schedule:
         self.pooled = []                                 # (register, value, offset): _pool
         self.host, self.guests = host, {}                # guests: index -> operand terms
         self.share = share
+        self.ram_copies, self._rams = ram_copies and ii is not None, {}
 
     def at(self, k):
         """The phase bit of offset ``k``: high while the job that started ``k`` clocks ago is
@@ -388,6 +395,9 @@ class Schedule:
         if self.ii is None or reg not in self.written or k <= self.written[reg] + self.ii:
             return reg
         c = max(k - self.ii, self.ready[reg])
+        if (self.ram_copies and c > self.written[reg] + self.ii and len(reg) > 1
+                and reg.reg is not getattr(self, "_slot", term(0)).reg):
+            return self._ram_copy(reg, k)
         if not hasattr(self, "_late"):
             self._late = _Regs()
         copies = self._late.setdefault(reg, {})
@@ -396,6 +406,32 @@ class Schedule:
             self.read(c, src)
             copies[c] = self._write(f"{reg.reg.name[len(self.name) + 1:]}_at{c}", src, c)
         return copies[c]
+
+    def _ram_copy(self, reg, k):
+        """``reg`` as the job reading at offset ``k`` wrote it: a LUT RAM of 16 words (a job's
+        slot, 4 bits, counts its starts; at most 16 jobs in flight, :meth:`finish`) written
+        at the offset ``reg`` is first valid, read at ``k`` (asynchronously, as a register
+        would be). One per register and read offset, each a read port."""
+        key = (id(reg.reg), k)
+        if key not in self._rams:
+            if not hasattr(self, "_slot"):
+                ptr = Signal(4, name=f"{self.name}_rptr")
+                with self.m.If(self.en & self.start):
+                    self.m.d.sync += ptr.eq(ptr + 1)
+                self._slot = self.input("rslot", ptr)
+            w = self.ready[reg]
+            mem = Memory(shape=reg.shape(), depth=16, init=[])
+            name = f"{reg.reg.name}_ram{k}"
+            self.m.submodules[name] = mem
+            wr, rd = mem.write_port(), mem.read_port(domain="comb")
+            at_w, at_k = self.late(self._slot, w), self.late(self._slot, k)
+            self.read(w, reg, at_w)
+            self.read(k, at_k)
+            out = Signal(reg.shape(), name=name)
+            self.m.d.comb += [wr.addr.eq(at_w), wr.data.eq(reg), wr.en.eq(self.en & self.at(w)),
+                              rd.addr.eq(at_k), out.eq(rd.data)]
+            self._rams[key] = Term.leaf(out)
+        return self._rams[key]
 
     def late_at(self, value, k):
         """``value`` with each register replaced by its copy still valid at offset ``k``."""
@@ -449,6 +485,8 @@ class Schedule:
                 self.outputs[reg] = True
 
     def finish(self):
+        if self._rams and -(-self.length // self.ii) > 16:
+            raise ValueError(f"{self.name}: more than 16 jobs in flight for its LUT RAM copies")
         if self.ii is not None:
             self._align()
         self._multipliers()

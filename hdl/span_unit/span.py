@@ -59,9 +59,11 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     out_valid = Signal(name="re_out_valid")
     if narrow:
         sc = Schedule(m, "re", Const(1), ii=ii, mults=0, narrow=mults, narrow_bits=narrow,
-                      mux_groups=8, platform=platform, shift=(None, narrow_left(w, narrow)))
+                      mux_groups=8, platform=platform, shift=(None, narrow_left(w, narrow)),
+                      ram_copies=True)
     else:
-        sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform)
+        sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform,
+                      ram_copies=True)
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
                  row_link.ready.eq(sc.aligned & space)]
     # what passes through unchanged (the row, the triangle's index and flat words, 2A, a
