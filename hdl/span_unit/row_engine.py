@@ -42,14 +42,15 @@ class RowEngine(wiring.Component):
     """``plan``: the raster's plan; ``rows``: the walker's row fields (``{name: shape}``);
     ``flat``: the flat words' names; ``consts``: the channel-constant memory's fields
     (``{name: shape}``) and its index bits, or None; ``narrow``: the mantissa bits of the
-    narrow engine (``span.row_engine``; its rows ``span.narrow_row_fields``), or None."""
+    narrow engine (``span.row_engine``; its rows ``span.narrow_row_fields``), or None;
+    ``registered=False``: the ``late`` writes a clock early, for the caller to register."""
 
-    def __init__(self, plan, rows, flat=(), consts=None, narrow=None):
+    def __init__(self, plan, rows, flat=(), consts=None, narrow=None, registered=True):
         self.plan, self.rows, self.flat = plan, dict(rows), tuple(flat)
         self.const_fields, self.index_bits = consts or (None, 0)
-        self.narrow = narrow
+        self.narrow, self.registered = narrow, registered
         form = _form(plan, tuple(self.rows.items()), self.flat,
-                     consts and (tuple(consts[0].items()), consts[1]), narrow)
+                     consts and (tuple(consts[0].items()), consts[1]), narrow, registered)
         # its memories, its row interval and length, and its last write's offset from the start
         self.memories, self.ii, self.length, self.offset = form
         # the memories written at the slot the engine gives (the serial engine's): what a row
@@ -76,7 +77,8 @@ class RowEngine(wiring.Component):
         rows = {k: getattr(self.i, k) for k in self.rows}
         writes, started, written, t = plan_row_engine(m, self.plan, self.plan.setup.w, rows,
                                                       self.i, self.space, platform,
-                                                      self.flat, consts, self.narrow)
+                                                      self.flat, consts, self.narrow,
+                                                      self.registered)
         for name, vals, en, slot in writes:
             port = getattr(self, name)
             m.d.comb += [port.en.eq(en)] + [port.data[k].eq(x) for k, x in vals.items()]
@@ -88,7 +90,7 @@ class RowEngine(wiring.Component):
 
 
 @functools.lru_cache(maxsize=None)
-def _form(plan, rows, flat, consts, narrow=None):
+def _form(plan, rows, flat, consts, narrow=None, registered=True):
     """The engine's memories (``{name: ({field: shape}, slotted)}``), its row interval, its
     length and the offset of a row's last write from its start, from a build of it on its
     own."""
@@ -99,7 +101,7 @@ def _form(plan, rows, flat, consts, narrow=None):
         fields, bits = consts
         consts = (Signal(bits), {k: Signal(s, name=k) for k, s in fields}, bits)
     writes, _, _, t = plan_row_engine(m, plan, plan.setup.w, rows, link, Signal(), None, flat,
-                                      consts, narrow)
+                                      consts, narrow, registered)
     Fragment.get(m, None)                        # (its memories used, for Amaranth's checks)
     memories = {name: ({k: Value.cast(x).shape() for k, x in vals.items()}, slot is not None)
                 for name, vals, _, slot in writes}

@@ -7,7 +7,8 @@ walker carries its ``narrow`` bit on every row. Rows go to the narrow engine
 on one wide multiplier: ``row_mults=1``). Both write the same row queue: a row may start on
 one engine only when the other has no row in flight (``busy``), so rows are written in the
 order they start, and no memory has two writers in a clock. ``started``, ``written`` and
-each memory's port are the ORs and the multiplexers of the two engines'.
+each memory's port are the ORs and the multiplexers of the two engines'; the row values
+(``late``) are multiplexed a clock before their one register, so the pair has one set.
 """
 import dataclasses
 
@@ -32,18 +33,20 @@ class RowPair(wiring.Component):
         narrow_only = {"rsm", "narrow", *(f"c{c}_{k}" for c in range(ch) for k in NARROW_KEYS)}
         want = narrow_row_fields(plan.setup.w, M, plan.modes, flat)
         self.rows = dict(rows)
-        self.narrow = RowEngine(plan, {k: rows[k] for k in want}, flat, narrow=M)
+        self.narrow = RowEngine(plan, {k: rows[k] for k in want}, flat, narrow=M,
+                                registered=False)
         self.wide = RowEngine(dataclasses.replace(plan, row_mults=1, row_narrow=0),
-                              {k: s for k, s in rows.items() if k not in narrow_only}, flat)
+                              {k: s for k, s in rows.items() if k not in narrow_only}, flat,
+                              registered=False)
         self.memories = {}
         for name, (fields, slotted) in self.narrow.memories.items():
             other, _ = self.wide.memories[name]
             self.memories[name] = ({k: _wider(s, other[k]) for k, s in fields.items()},
                                    slotted)
         # the narrow engine's interval (the other takes the few rows it cannot hold), the
-        # longer length and last write
+        # longer length (and the row values' register) and last write
         self.ii = self.narrow.ii
-        self.length = max(self.narrow.length, self.wide.length)
+        self.length = max(self.narrow.length, self.wide.length) + 1
         self.offset = max(self.narrow.offset, self.wide.offset)
         self.offsets = {}
         members = {"i": In(wiring.Signature({"valid": Out(1), "ready": In(1),
@@ -76,13 +79,14 @@ class RowPair(wiring.Component):
                      w.i.valid.eq(self.i.valid & ~want & go_w),
                      self.i.ready.eq(Mux(want, n.i.ready & go_n, w.i.ready & go_w)),
                      self.started.eq(n.started | w.started),
-                     self.written.eq(n.written | w.written),
-                     self.busy.eq(n.busy | w.busy)]
+                     self.busy.eq(n.busy | w.busy | self.written)]
+        m.d.sync += self.written.eq(n.written | w.written)
         for name, (fields, _) in self.memories.items():
             port, pn, pw = getattr(self, name), getattr(n, name), getattr(w, name)
-            m.d.comb += port.en.eq(pn.en | pw.en)
+            d = m.d.sync if name == "late" else m.d.comb
+            d += port.en.eq(pn.en | pw.en)
             for k in fields:
-                m.d.comb += port.data[k].eq(Mux(pn.en, pn.data[k], pw.data[k]))
+                d += port.data[k].eq(Mux(pn.en, pn.data[k], pw.data[k]))
         return m
 
 

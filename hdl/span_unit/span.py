@@ -8,7 +8,7 @@ and the stepper are components of their own.
   difference along x, Pu u + Pv v + P0. Exact numerators: rounding never accumulates across
   rows.
 """
-from amaranth.hdl import Const, Signal, signed, unsigned
+from amaranth.hdl import Const, Signal, Value, signed, unsigned
 from amaranth.lib.memory import Memory
 
 from ..sched import OPERAND, Schedule, _or_tree
@@ -22,21 +22,22 @@ __all__ = ["narrow_left", "narrow_row_fields", "plan_row_engine", "row_engine", 
 
 
 def plan_row_engine(m, plan, w, rows, row_link, space, platform=None, flat=(), consts=None,
-                    narrow=None):
+                    narrow=None, registered=True):
     """The plan's row engine: every channel a job (:func:`row_engine`, on ``row_mults`` or
-    one multiplier per channel and one more; ``narrow``: on M-bit mantissas), or one channel
-    a job (:func:`row_engine_serial`, ``row_serial``)."""
+    one multiplier per channel and one more; ``narrow``: on M-bit mantissas;
+    ``registered=False``: its row values a clock before their register, for ``RowPair``'s
+    one register), or one channel a job (:func:`row_engine_serial`, ``row_serial``)."""
     mults = plan.row_serial or plan.row_mults or len(plan.channels) + 1
     if plan.row_serial:
         assert not narrow, "the narrow engine has every channel in a job"
         return row_engine_serial(m, w, plan.modes, rows, row_link, space, platform, flat,
                                  mults, consts, plan.precision)
     return row_engine(m, w, plan.modes, rows, row_link, space, platform, flat, mults, consts,
-                      plan.precision, narrow)
+                      plan.precision, narrow, registered)
 
 
 def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults=None,
-               consts=None, precision=None, narrow=None):
+               consts=None, precision=None, narrow=None, registered=True):
     """Phi and its first difference at each span's first pixel centre, on ``channels + 1``
     shared multipliers, a row every ``ii`` clocks: u = nu r / 2**sh, v likewise (eq 18-20),
     then per channel Phi = f + u (d + a u + c v) + v (e + b v) (eq 17) and
@@ -45,7 +46,8 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     ``space`` (a register of the row queue) promises a place for it. ``precision``: each
     channel's fraction bits out; its Phi, d and 2A go into the queue floored to ``w.fi`` of
     it. ``narrow``: mantissa bits M (at most 20), every product narrow (:func:`narrow_left`;
-    the constants are then the setup's mantissas and shifts). Returns what
+    the constants are then the setup's mantissas and shifts). ``registered=False``: the
+    ``late`` write's values and enable a clock early, not registered. Returns what
     :func:`row_engine_serial` returns: the writes into the row queue
     (``late``, the row values computed, and ``early``, what the engine only carries, taken at
     the row's start), the row's start, its last write and the timing. ``consts`` is the
@@ -139,8 +141,12 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
     out = _outputs(sc, w, v, out, end, {f"phi{ch}": _half(w, p) for ch, p in
                                         enumerate(precision)},
-                   {f"{k}{ch}": cut[ch] for ch in range(channels) for k in ("phi", "d")})
-    m.d.sync += out_valid.eq(sc.at(end))
+                   {f"{k}{ch}": cut[ch] for ch in range(channels) for k in ("phi", "d")},
+                   registered)
+    if registered:
+        m.d.sync += out_valid.eq(sc.at(end))
+    else:
+        m.d.comb += out_valid.eq(sc.at(end))
     sc.finish()
     sc.check()
     writes = [("late", out, out_valid, None), ("early", early, sc.start, None)]
@@ -338,12 +344,12 @@ def _half(w, precision):
     return 1 << (w.FI - precision - 1)
 
 
-def _outputs(sc, w, v, vals, end, halves, cuts=None):
-    """The row engine's outputs registered at ``end``; what the stepper would otherwise
-    compute from the queue's RAM on its way into a register is computed here: the rounding
-    half in each Phi (``halves``: a constant, or ``(register, function of it)``), the
-    floors to a channel's FI (``cuts``: bits dropped), and the span's tests (empty, one
-    pixel)."""
+def _outputs(sc, w, v, vals, end, halves, cuts=None, registered=True):
+    """The row engine's outputs registered at ``end`` (or, not ``registered``, their values
+    at ``end``); what the stepper would otherwise compute from the queue's RAM on its way
+    into a register is computed here: the rounding half in each Phi (``halves``: a
+    constant, or ``(register, function of it)``), the floors to a channel's FI (``cuts``:
+    bits dropped), and the span's tests (empty, one pixel)."""
     cuts = cuts or {}
     fns = {}
     for k, x in vals.items():
@@ -356,6 +362,11 @@ def _outputs(sc, w, v, vals, end, halves, cuts=None):
     fns.update({k: (lambda r: r, v[k]) for k in ("xs", "xe")})
     fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
     fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
+    if not registered:
+        assert all(sc.when(*regs) <= end for _, *regs in fns.values())
+        late = {k: [sc.late(r, end) for r in regs] for k, (_, *regs) in fns.items()}
+        sc.read(end, *(r for regs in late.values() for r in regs))
+        return {k: Value.cast(fn(*late[k])) for k, (fn, *_) in fns.items()}
     out = {k: sc.apply(f"o_{k}", fn, *regs, after=end) for k, (fn, *regs) in fns.items()}
     sc.keep(*out.values())
     return out
