@@ -76,6 +76,12 @@ class Widths:
         (docs/quadratic.md "A channel's precision")."""
         return self.FI - (VALUE.frac_bits - precision)
 
+    def acc(self, precision):
+        """The bits the stepper keeps of Phi, d and 2A at :meth:`fi`: it steps them modulo
+        2**acc, as only emitted values must fit (|Phi| < 128: 7 bits and a sign, and one for
+        the rounding half); so the row engine and its queue keep no more."""
+        return self.fi(precision) + 9
+
     @property
     def wc(self):                      # vertex coordinate width (sub-pixel units)
         return self.screen_bits + 2 + self.sub_bits

@@ -72,9 +72,11 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     # linear channel's d = P0) goes to the row queue as the row starts, not through a copy
     # for each row in flight (over the engine's length, 6 copies of each 2A at the default)
     early = {k: rows[k] for k in ("j", "tri", *flat)}
-    early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] >> cut[ch] for ch in range(channels)})
-    early.update({f"d{ch}": rows[f"c{ch}_p0"] >> cut[ch] for ch, mode in enumerate(modes)
-                  if mode == "linear"})
+    acc = [w.acc(p) for p in precision]             # what the stepper keeps of them
+    early.update({f"c{ch}_a2": (rows[f"c{ch}_a2"] >> cut[ch])[:acc[ch]]
+                  for ch in range(channels)})
+    early.update({f"d{ch}": (rows[f"c{ch}_p0"] >> cut[ch])[:acc[ch]]
+                  for ch, mode in enumerate(modes) if mode == "linear"})
     carried = {"j", "tri", *flat, *(f"c{ch}_a2" for ch in range(channels)),
                *(f"c{ch}_p0" for ch, mode in enumerate(modes) if mode == "linear")}
     # what is read only at the end, f and a quadratic channel's P0: a memory per channel
@@ -141,8 +143,8 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
     out = _outputs(sc, w, v, out, end, {f"phi{ch}": _half(w, p) for ch, p in
                                         enumerate(precision)},
-                   {f"{k}{ch}": cut[ch] for ch in range(channels) for k in ("phi", "d")},
-                   registered)
+                   {f"{k}{ch}": (cut[ch], acc[ch]) for ch in range(channels)
+                    for k in ("phi", "d")}, registered)
     if registered:
         m.d.sync += out_valid.eq(sc.at(end))
     else:
@@ -225,13 +227,16 @@ def row_engine_serial(m, w, modes, rows, row_link, space, platform=None, flat=()
     addr, chan = sc.late(v["slot"], at), sc.late(v["sel"], at)
     sc.read(at, addr, chan)
     en = sc.at(at)
-    writes = [(f"c{c}", {f"phi{c}": out["phi"] >> cut[c], f"d{c}": out["d"] >> cut[c]},
-               en & chan[c], addr) for c in range(channels)]
+    acc = [w.acc(p) for p in precision]
+    writes = [(f"c{c}", {f"phi{c}": (out["phi"] >> cut[c])[:acc[c]],
+                         f"d{c}": (out["d"] >> cut[c])[:acc[c]]}, en & chan[c], addr)
+              for c in range(channels)]
     last = Signal(name="rs_written")
     m.d.comb += last.eq(en & chan[-1])
     writes.append(("late", {k: out[k] for k in ("xs", "xe", "some", "one")}, last, addr))
     early = {k: rows[k] for k in ("j", "tri", *flat)}
-    early.update({f"c{ch}_a2": rows[f"c{ch}_a2"] >> cut[ch] for ch in range(channels)})
+    early.update({f"c{ch}_a2": (rows[f"c{ch}_a2"] >> cut[ch])[:acc[ch]]
+                  for ch in range(channels)})
     writes.append(("early", early, started, slot))
     sc.finish()
     sc.check()
@@ -348,17 +353,20 @@ def _outputs(sc, w, v, vals, end, halves, cuts=None, registered=True):
     """The row engine's outputs registered at ``end`` (or, not ``registered``, their values
     at ``end``); what the stepper would otherwise compute from the queue's RAM on its way
     into a register is computed here: the rounding half in each Phi (``halves``: a
-    constant, or ``(register, function of it)``), the floors to a channel's FI (``cuts``:
-    bits dropped), and the span's tests (empty, one pixel)."""
+    constant, or ``(register, function of it)``), the floors to a channel's FI and the bits
+    the stepper keeps (``cuts``: ``(bits dropped, bits kept)``), and the span's tests
+    (empty, one pixel)."""
     cuts = cuts or {}
     fns = {}
     for k, x in vals.items():
-        half, k_cut = halves.get(k, 0), cuts.get(k, 0)
+        half, (k_cut, keep) = halves.get(k, 0), cuts.get(k, (0, None))
+        trim = (lambda y: y) if keep is None else (lambda y, n=keep: y[:n])
         if isinstance(half, tuple):
             reg, of = half
-            fns[k] = ((lambda r, h, of=of, c=k_cut: (r + of(h)) >> c), x, reg)
+            fns[k] = ((lambda r, h, of=of, c=k_cut, t=trim: t((r + of(h)) >> c)), x, reg)
         else:
-            fns[k] = ((lambda r, h=half, c=k_cut: (r + h) >> c if h else r >> c), x)
+            fns[k] = ((lambda r, h=half, c=k_cut, t=trim: t((r + h) >> c if h else r >> c)),
+                      x)
     fns.update({k: (lambda r: r, v[k]) for k in ("xs", "xe")})
     fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
     fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])

@@ -35,8 +35,7 @@ class Stepper(wiring.Component):
     def elaborate(self, platform):
         m, w, rows, o = Module(), self.w, self.i.payload, self.o
         channels = len(self.precision)
-        # Phi and d wrap modulo 2**acc_bits: only emitted values must fit: |Phi| < 128
-        acc_bits = [w.fi(p) + 9 for p in self.precision]
+        acc_bits = [w.acc(p) for p in self.precision]    # Phi, d wrap modulo 2**acc_bits
         cur, last = Signal(name="st_cur"), Signal(name="st_last")
         reg = lambda shape, name: Signal(shape, name=name, reset_less=True)   # no reset:
         x, xe = reg(w.screen_bits + 1, "st_x"), reg(w.screen_bits + 1, "st_xe")  # valid bits
