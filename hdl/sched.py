@@ -221,6 +221,9 @@ class Schedule:
         k = self.when(a, b, after=after)
         fits = (shifted is not True
                 and all(len(x) + (0 if x.shape().signed else 1) <= self.nbits for x in (a, b)))
+        lat = self.lat - 2 if fits and self.narrow and self.nbits == NARROW else self.lat
+        if shifted is not False:          # its amount is registered a clock before the sum
+            k = max(k, self.when(self.shift[0] if shifted is True else shifted) + 1 - lat)
         self.fits += fits
         units = ([(True, i, u) for i, u in enumerate(self.narrow)] if fits and self.narrow
                  else [(False, i, u) for i, u in enumerate(self.mults)])
@@ -245,12 +248,11 @@ class Schedule:
             a, b = self.late_at(a, k), self.late_at(b, k)
             unit[-1] = (k, a, b)
         self.read(k, a, b)
-        lat = self.lat - 2 if narrow and self.nbits == NARROW else self.lat
         total = self._total(idx, narrow)
-        if shifted is not False:          # the amount is read with the product's sum
-            amount = self.late(self.shift[0] if shifted is True else shifted, k + lat)
+        if shifted is not False:          # the amount is registered as the product's sum is
+            amount = self.late(self.shift[0] if shifted is True else shifted, k + lat - 1)
             total = self._shifted(idx, amount, k + lat, narrow)
-            self.read(k + lat, amount)
+            self.read(k + lat - 1, amount)
             lat += 2
             natural = len(total)                    # the product shifted left, then right
         self.length = max(self.length, k + lat + 1)
@@ -259,8 +261,9 @@ class Schedule:
         return self._write(name, total, k + lat, shape or signed(natural), pool=True)
 
     def _shifted(self, idx, amount, at, narrow=False):
-        """Multiplier ``idx``'s shifter, reading ``amount`` at offset ``at`` (with ``ii``, its
-        products may read it from different copies: the phase picks, see finish)."""
+        """Multiplier ``idx``'s shifter, shifting at offset ``at`` by ``amount``, read a clock
+        earlier into the shifter's own register (with ``ii``, its products may read it from
+        different copies: the phase picks, see finish)."""
         if not hasattr(self, "_shifters"):
             self._shifters = {}
         key = (narrow, idx)
@@ -271,13 +274,15 @@ class Schedule:
             coarse = Signal(signed(len(total) + left), name=f"{n}_coarse", reset_less=True)
             reg = Signal(signed(len(total) + left), name=f"{n}_shifted", reset_less=True)
             low = Signal(3, name=f"{n}_low", reset_less=True)
-            self._shifters[key] = [], (total << left, coarse, low, reg)
+            amt = Signal(len(amount), name=f"{n}_amount", reset_less=True)
+            self._shifters[key] = [], (total << left, amt, coarse, low, reg)
         self._shifters[key][0].append((at, amount))
-        return self._shifters[key][1][3]
+        return self._shifters[key][1][4]
 
     def _build_shifters(self):
-        """The shifters: two stages, by the amount's high bits, then its low ones."""
-        for reads, (value, coarse, low, reg) in getattr(self, "_shifters", {}).values():
+        """The shifters: the amount registered (no LUT RAM copy or multiplexer of copies on
+        the shifter's path), then two stages, by its high bits, then its low ones."""
+        for reads, (value, amt, coarse, low, reg) in getattr(self, "_shifters", {}).values():
             copies = []
             for at, amount in reads:
                 if not any(amount is c for _, c in copies):
@@ -285,12 +290,13 @@ class Schedule:
             if len(copies) == 1:
                 amount = copies[0][1]
             else:                         # one copy per read offset: a one-hot AND-OR
-                amount = _or_tree([Mux(_or_tree([self.at(at) for at, c in reads
+                amount = _or_tree([Mux(_or_tree([self.at(at - 1) for at, c in reads
                                                  if c is amount]), amount, 0)
                                    for _, amount in copies])
             with self.m.If(self.en):
-                self.m.d.sync += [coarse.eq(value >> Cat(Const(0, 3), amount[3:])),
-                                  low.eq(amount[:3]), reg.eq(coarse >> low)]
+                self.m.d.sync += [amt.eq(amount),
+                                  coarse.eq(value >> Cat(Const(0, 3), amt[3:])),
+                                  low.eq(amt[:3]), reg.eq(coarse >> low)]
 
     def _total(self, idx, narrow=False):
         """A multiplier's product: a register (wide), or the block's output (narrow)."""
