@@ -91,8 +91,12 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
     slot = sc.input("cslot", wptr)
 
     def read_at(ch, k):
-        """Channel ``ch``'s end values as the row at offset ``k`` wrote them."""
-        vals = {n: rows[n] for n in ends[ch]}
+        """Channel ``ch``'s end values as the row at offset ``k`` wrote them: f at FI with
+        the output's rounding half in it (``f_fi``; an addition on the way in, from the
+        walker's registers), P0."""
+        f = rows[f"c{ch}_f"]
+        vals = {f"c{ch}_f_fi": (Value.cast(f) << (w.FI - w.FO)) + _half(w, precision[ch]),
+                **{n: rows[n] for n in ends[ch][1:]}}
         mem = Memory(shape=unsigned(sum(len(x) for x in vals.values())), depth=16, init=[])
         m.submodules[f"row_ends{ch}"] = mem
         wr, rd = mem.write_port(), mem.read_port(domain="comb")
@@ -137,14 +141,13 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
         else:
             k = sc.when(uvt, puv)
             end_vals = read_at(ch, k)
-            out[f"d{ch}"] = sc.let(f"d{ch}", term(end_vals["p0"]) + puv, after=k)
-        out[f"phi{ch}"] = sc.let(f"phi{ch}", (term(end_vals["f"]) << (w.FI - w.FO)) + uvt,
-                                 after=k)
+            out[f"d{ch}"] = sc.let(f"d{ch}", ((term(end_vals["p0"]) + puv) >> cut[ch])
+                                   [:acc[ch]], after=k)
+        # Phi with its rounding half, floored to the channel's FI, the bits the stepper keeps
+        out[f"phi{ch}"] = sc.let(f"phi{ch}", ((term(end_vals["f_fi"]) + uvt) >> cut[ch])
+                                 [:acc[ch]], after=k)
     end = max(sc.ready[x] for x in out.values() if x in sc.ready)
-    out = _outputs(sc, w, v, out, end, {f"phi{ch}": _half(w, p) for ch, p in
-                                        enumerate(precision)},
-                   {f"{k}{ch}": (cut[ch], acc[ch]) for ch in range(channels)
-                    for k in ("phi", "d")}, registered)
+    out = _outputs(sc, w, v, out, end, registered=registered)
     if registered:
         m.d.sync += out_valid.eq(sc.at(end))
     else:
@@ -257,6 +260,7 @@ def _start(sc, w, v):
     num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
            for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
     v.update(sc.lets(xs=clamp(v["xl"]), xe=clamp(v["xr"]), **num))
+    v.update(sc.lets(some=v["xs"] < v["xe"], one=v["xs"] + 1 == v["xe"]))   # the span's tests
 
 
 def _uv(sc, w, v):
@@ -349,27 +353,22 @@ def _half(w, precision):
     return 1 << (w.FI - precision - 1)
 
 
-def _outputs(sc, w, v, vals, end, halves, cuts=None, registered=True):
+def _outputs(sc, w, v, vals, end, halves=None, registered=True):
     """The row engine's outputs registered at ``end`` (or, not ``registered``, their values
-    at ``end``); what the stepper would otherwise compute from the queue's RAM on its way
-    into a register is computed here: the rounding half in each Phi (``halves``: a
-    constant, or ``(register, function of it)``), the floors to a channel's FI and the bits
-    the stepper keeps (``cuts``: ``(bits dropped, bits kept)``), and the span's tests
-    (empty, one pixel)."""
-    cuts = cuts or {}
+    at ``end``, no logic in them); what the stepper would otherwise compute from the
+    queue's RAM on its way into a register is computed here or before: the rounding half in
+    each Phi (``halves``: a constant, or ``(register, function of it)``), and the span's
+    tests (empty, one pixel, :func:`_start`)."""
+    halves = halves or {}
     fns = {}
     for k, x in vals.items():
-        half, (k_cut, keep) = halves.get(k, 0), cuts.get(k, (0, None))
-        trim = (lambda y: y) if keep is None else (lambda y, n=keep: y[:n])
+        half = halves.get(k, 0)
         if isinstance(half, tuple):
             reg, of = half
-            fns[k] = ((lambda r, h, of=of, c=k_cut, t=trim: t((r + of(h)) >> c)), x, reg)
+            fns[k] = ((lambda r, h, of=of: r + of(h)), x, reg)
         else:
-            fns[k] = ((lambda r, h=half, c=k_cut, t=trim: t((r + h) >> c if h else r >> c)),
-                      x)
-    fns.update({k: (lambda r: r, v[k]) for k in ("xs", "xe")})
-    fns["some"] = (lambda a, b: a < b, v["xs"], v["xe"])
-    fns["one"] = (lambda a, b: a + 1 == b, v["xs"], v["xe"])
+            fns[k] = ((lambda r, h=half: r + h if h else r), x)
+    fns.update({k: (lambda r: r, v[k]) for k in ("xs", "xe", "some", "one")})
     if not registered:
         assert all(sc.when(*regs) <= end for _, *regs in fns.values())
         late = {k: [sc.late(r, end) for r in regs] for k, (_, *regs) in fns.items()}
