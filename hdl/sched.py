@@ -7,8 +7,9 @@ start pulse, so several jobs may be in flight. With ``ii``, jobs start only on e
 clock (``aligned``, a free-running count), the multipliers are reserved modulo ``ii``, and a
 register read more than ``ii`` offsets after it was written is read from a copy (``late``),
 so the next job never overwrites a value before its last read (:meth:`Schedule.check`);
-with ``ram_copies``, a value that would take two copies or more is read instead from a
-16-deep LUT RAM written as it lands, at the job's slot (:meth:`Schedule._ram_copy`);
+with ``ram_copies``, a value of more than 4 bits that would take two copies or more is read
+instead from a 16-deep LUT RAM written as it lands, at the job's slot (a RAM's address, 4
+bits, always from registers: :meth:`Schedule._ram_copy`);
 a division takes ``ceil((q_bits + 1) / ii)`` dividers in turn. The copies of one
 multiplier's products share registers where their lives (write to last read) do not
 overlap (:meth:`Schedule._pool`): a copy is the product's sum register, so a shared one needs
@@ -401,8 +402,7 @@ class Schedule:
         if self.ii is None or reg not in self.written or k <= self.written[reg] + self.ii:
             return reg
         c = max(k - self.ii, self.ready[reg])
-        if (self.ram_copies and c > self.written[reg] + self.ii and len(reg) > 1
-                and reg.reg is not getattr(self, "_slot", term(0)).reg):
+        if self.ram_copies and c > self.written[reg] + self.ii and len(reg) > 4:
             return self._ram_copy(reg, k)
         if not hasattr(self, "_late"):
             self._late = _Regs()
