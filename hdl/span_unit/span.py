@@ -63,9 +63,9 @@ def row_engine(m, w, modes, rows, row_link, space, platform=None, flat=(), mults
         sc = Schedule(m, "re", Const(1), ii=ii, mults=0, narrow=mults, narrow_bits=narrow,
                       mux_groups=8, platform=platform, shift=(None, narrow_left(w, narrow)),
                       ram_copies=True)
-    else:
+    else:                     # in RowPair (not ``registered``), late values in LUT RAM too
         sc = Schedule(m, "re", Const(1), ii=ii, mults=mults, mux_groups=8, platform=platform,
-                      ram_copies=True)
+                      ram_copies=not registered)
     m.d.comb += [sc.start.eq(row_link.valid & sc.aligned & space),
                  row_link.ready.eq(sc.aligned & space)]
     # what passes through unchanged (the row, the triangle's index and flat words, 2A, a
