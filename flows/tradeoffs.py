@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hdl.span_unit.plan import ROW_MULTS
 from scene.parse import load
 from scene.pipeline import METHODS, STAGES
 from sim.cli_common import UsageError, user_errors
@@ -122,7 +123,7 @@ def configurations(quick=False, knobs=None):
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
                          default=(recip, iters) == ("newton", 2)))
     # the raster's multipliers: the setup's (clocks per triangle), the row engine's (its
-    # row interval: 0 is one per channel and one more)
+    # row interval, ceil(products / multipliers))
     for n in (1, 2, 3):
         hw = {"setup_mults": n}
         rows.append(_row("setup multipliers", str(n), raster(**hw), scene="default",
@@ -137,9 +138,9 @@ def configurations(quick=False, knobs=None):
                        {"setup_ii": 16, "setup_mults": 2, "setup_narrow": 2, "row_mults": 6})):
         rows.append(_row("setup interval", label, raster(**hw), scene="default",
                          hardware=hw, unit=unit_raster(**hw), default=not hw))
-    for n in (0, 2, 3, 5, 6):                  # 5, 6: more than one a channel, a row in 4, 3
+    for n in (0, 1, 3, 4, 6):     # 0: ROW_MULTS (2); 4: one a channel and one more; 6: a row in 3
         hw = {"row_mults": n}
-        rows.append(_row("row multipliers", "one per channel + 1" if n == 0 else str(n),
+        rows.append(_row("row multipliers", f"{ROW_MULTS} (default)" if n == 0 else str(n),
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
                          default=n == 0))
     # the row engine's channels in turn on one datapath of n multipliers (a further channel

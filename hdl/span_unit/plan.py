@@ -16,12 +16,17 @@ from typing import NamedTuple
 
 from ..setup_unit.formats import MODES, VALUE, parse_groups, parse_modes, parse_precision
 
-__all__ = ["Channel", "RasterPlan", "Timing", "KNOBS", "RECIPS", "RANGES"]
+__all__ = ["Channel", "RasterPlan", "Timing", "KNOBS", "RECIPS", "RANGES", "ROW_MULTS"]
 
+# the row engine's wide multipliers by default: the default pipeline's 28 MULT18X18D less
+# its other units' 6 and the setup's 4 leave 18 - 4 - 6 = 8, two wide multipliers (a row
+# every ceil(products / 2) clocks; docs/quadratic.md, "The default: two row multipliers")
+ROW_MULTS = 2
 # the architecture's knobs: name -> (default, range, what it is); README "Raster knobs"
 KNOBS = {
     "setup_mults": (1, (1, 6), "the setup's multipliers (35 x 35, four MULT18X18D each)"),
-    "row_mults": (0, (0, 13), "the row engine's; 0: one per channel and one more"),
+    "row_mults": (0, (0, 13), f"the row engine's; 0: {ROW_MULTS} (with row_narrow: one per "
+                              f"channel and one more)"),
     "setup_ii": (0, (0, 255), "clocks between triangles in the setup; 0: one at a time"),
     "setup_narrow": (0, (0, 6), "the setup's 18 x 18 multipliers (one MULT18X18D each)"),
     "row_serial": (0, (0, 9), ">0: the row engine's channels in turn on this many"),
