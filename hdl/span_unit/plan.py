@@ -18,14 +18,16 @@ from ..setup_unit.formats import MODES, VALUE, parse_groups, parse_modes, parse_
 
 __all__ = ["Channel", "RasterPlan", "Timing", "KNOBS", "RECIPS", "RANGES", "ROW_MULTS"]
 
-# the row engine's wide multipliers by default: the default pipeline's 28 MULT18X18D less
-# its other units' 6 and the setup's 4 leave 18 - 4 - 6 = 8, two wide multipliers (a row
-# every ceil(products / 2) clocks; docs/quadratic.md, "The default: two row multipliers")
+# the row engine's wide multipliers by default: issue 49's 18 MULT18X18D for the default
+# pipeline, less its other units' 6 and the setup's 4, leave 8: two wide multipliers, a row
+# every ceil(products / 2) clocks (docs/quadratic.md, "The row engine's multipliers")
 ROW_MULTS = 2
-# the architecture's knobs: name -> (default, range, what it is); README "Raster knobs"
+# the architecture's knobs: name -> (default, range, what it is); the CLI's --raster help
+# and docs/quadratic.md ("The knobs, and what they buy")
 KNOBS = {
     "setup_mults": (1, (1, 6), "the setup's multipliers (35 x 35, four MULT18X18D each)"),
-    "row_mults": (0, (0, 13), f"the row engine's; 0: {ROW_MULTS} (with row_narrow: one per "
+    "row_mults": (0, (0, 13), f"the row engine's, a row every ceil(products / row_mults) "
+                              f"clocks; 0: {ROW_MULTS} (with row_narrow: one narrow a "
                               f"channel and one more)"),
     "setup_ii": (0, (0, 255), "clocks between triangles in the setup; 0: one at a time"),
     "setup_narrow": (0, (0, 6), "the setup's 18 x 18 multipliers (one MULT18X18D each)"),
