@@ -8,7 +8,8 @@ lists both):
   (u24); the triangle's fields are ignored.
 
 **Order.** A write waits at the head of the stream until every triangle before it has left the
-pipeline (``busy`` low: nothing in any stage, queue or output register), then takes one clock,
+pipeline (``busy`` low: nothing in any stage, queue or output register; seen a clock later,
+through a register), then takes one clock,
 and applies to every triangle after it. A write behind triangles in flight therefore holds the
 stream (``i.ready`` low) until they drain, so no triangle is ever shaded with half of one
 material and half of another; writes in a row take a clock each. The write is registered once

@@ -140,7 +140,7 @@ class ScenePipeline(Unit):
         m.submodules.raster = raster = RasterUnit(**self.raster.params)
         # the host port (scene/host.py): a write waits at the head until the pipeline is
         # empty, then is registered; triangles go on to the raster
-        drained, write = Signal(), self.i.payload.cmd
+        drained, write = Signal(init=1), self.i.payload.cmd    # empty at reset
         m.d.comb += [raster.i.valid.eq(self.i.valid & ~write),
                      self.i.ready.eq(Mux(write, drained, raster.i.ready))]
         m.d.comb += [raster.i.payload[f.name].eq(self.i.payload[f.name])
@@ -178,7 +178,12 @@ class ScenePipeline(Unit):
             held.append(unit.busy)
             last, rename = unit.o, None
         wiring.connect(m, last, wiring.flipped(self.o))
-        m.d.comb += [drained.eq(~busy), self.busy.eq(busy | w_en),
+        # ``drained`` a register: nothing in flight a clock ago and no triangle taken then
+        # (a write at the head lets none pass, so it stays true). The OR of every stage's
+        # busy bit, from across the chip, then never reaches the input's ready in the same
+        # clock (placed, that path set the default pipeline's clock at 122.8 MHz)
+        m.d.sync += drained.eq(~busy & ~(raster.i.valid & raster.i.ready))
+        m.d.comb += [self.busy.eq(busy | w_en),
                      self.culled.eq(raster.culled), self.held.eq(Cat(*held))]
         return m
 
