@@ -26,9 +26,9 @@ __all__ = ["Queue", "ROW_QUEUE", "credits"]
 
 # Rows the row queue holds (started, not yet taken): all but one of its memories' 16 words,
 # so a row engine may run ahead of the stepper by 15 rows. Measured (batch Verilator, the
-# default scene's pipeline): 8 gave 0.897 fragments per clock on the default torus, 15 gives
-# 0.921; the short rows at triangles' tips drain a shallow queue while the engine's ~45
-# clocks of latency refill it.
+# default scene's pipeline, a row every 5 clocks): 8 gave 0.897 fragments per clock on the
+# default torus, 15 gave 0.921; the short rows at triangles' tips drain a shallow queue while
+# the engine's ~45 clocks of latency refill it.
 ROW_QUEUE = 15
 
 
