@@ -257,7 +257,11 @@ def _start(sc, w, v):
     ``xe`` into ``v``) and the numerator track it starts on (column 0 when the left edge is
     off screen), ``nu``, ``nv`` into ``v``."""
     size = 1 << w.screen_bits
-    clamp = lambda i: Mux(i < 0, 0, Mux(i > size, size, i))
+
+    def clamp(i):     # to [0, size]: i >= size (size a power of two) tests the bits above it,
+        # where i > size was a carry chain (the default pipeline's critical path, placed)
+        big = i[w.screen_bits:len(i) - 1].any() if len(i) - 1 > w.screen_bits else 0
+        return Mux(i[-1], 0, Mux(big, size, i))
     border = v["xl"] < 0                          # the span starts at column 0: its track
     num = {f"n{a}": Mux(border, v[f"B_{a}"], v[f"E_{a}"])[:min(w.wn, OPERAND)].as_signed()
            for a in "uv"}                         # modulo 2**35: |nu| <= |Omega| < 2**33
