@@ -1,8 +1,8 @@
-"""What the row engine costs a channel, synthesised for the ECP5-25F: today's wide engine
+"""What the row engine costs a channel, synthesised for the ECP5-25F: the wide engine
 (products of 35-bit operands, four MULT18X18D each) against the narrow one of issue 49's
 block floating point (products of M-bit mantissas, one MULT18X18D each: ``span.row_engine``
-with ``narrow=M``), at 3 and 9 X-shading channels, each on channels + 1 multipliers (a row
-every 5 clocks at 3 channels). The engine alone (``RowEngine``), its row fields in and its
+with ``narrow=M``, a multiplier a channel and one more), at 3 and 9 X-shading channels; the
+wide one on the default's two (``RasterPlan.row_multipliers``). The engine alone (``RowEngine``), its row fields in and its
 row-queue writes out as ports: the wide one's fields as the default raster's walker gives
 them, the narrow one's as its setup would (``span.narrow_row_fields``). Then the whole
 raster (the default scene's: a linear channel, then X-shading ones) at 3 and 9 channels,
@@ -24,13 +24,13 @@ from hdl.span_unit.span import narrow_row_fields
 from .fpga import OUT, _run, synthesise, tool
 
 CHANNELS = (3, 9)
-FORMS = (("wide (today)", None), *((f"narrow, M = {m}", m) for m in (22, 21, 20, 18)))
+FORMS = (("wide (default)", None), *((f"narrow, M = {m}", m) for m in (22, 21, 20, 18)))
 COLUMNS = ("MULT18X18D", "LUT4", "FF")
 
 
 def engine(channels, narrow):
     """The row engine of the default raster at ``channels`` X-shading channels."""
-    raster = Raster(channels=channels)
+    raster = Raster(channels=channels, **({"row_narrow": narrow} if narrow else {}))
     if narrow:
         rows = narrow_row_fields(raster.setup.w, narrow, raster.plan.modes)
     else:
@@ -83,7 +83,7 @@ def _table(title, forms, measure_one):
 def main():
     _table("row engine", FORMS, measure)
     print()
-    _table("raster", (("wide (today)", None), ("row_narrow=21", 21)), raster)
+    _table("raster", (("wide (default)", None), ("row_narrow=21", 21)), raster)
 
 
 if __name__ == "__main__":

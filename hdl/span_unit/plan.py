@@ -134,6 +134,13 @@ class RasterPlan:
         return _timing(self)
 
     @property
+    def row_multipliers(self):
+        """The row engine's multipliers: ``row_serial``'s, ``row_mults``, or by default
+        ``ROW_MULTS`` wide ones (with ``row_narrow``: a narrow one a channel and one more)."""
+        return (self.row_serial or self.row_mults
+                or (len(self.channels) + 1 if self.row_narrow else ROW_MULTS))
+
+    @property
     def latency(self):
         """From a triangle in to its first fragment out, when nothing waits: the setup (to
         its results' last register, or last queue write), the walker's load and its row

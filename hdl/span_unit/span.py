@@ -14,7 +14,6 @@ from amaranth.lib.memory import Memory
 from ..sched import OPERAND, Schedule, _or_tree
 from ..term import Cat, Mux, term
 from ..setup_unit.formats import VALUE
-from .plan import ROW_MULTS
 
 AMOUNT_BITS = 6       # a narrow product's shift into FI (``golden.bfp.AMOUNT_BITS``)
 
@@ -24,12 +23,11 @@ __all__ = ["narrow_left", "narrow_row_fields", "plan_row_engine", "row_engine", 
 
 def plan_row_engine(m, plan, w, rows, row_link, space, platform=None, flat=(), consts=None,
                     narrow=None, registered=True):
-    """The plan's row engine: every channel a job (:func:`row_engine`, on ``row_mults`` or
-    ``ROW_MULTS``; ``narrow``: on M-bit mantissas, one multiplier per channel and one more;
+    """The plan's row engine: every channel a job (:func:`row_engine`, on the plan's
+    ``row_multipliers``; ``narrow``: on M-bit mantissas;
     ``registered=False``: its row values a clock before their register, for ``RowPair``'s
     one register), or one channel a job (:func:`row_engine_serial`, ``row_serial``)."""
-    mults = (plan.row_serial or plan.row_mults
-             or (len(plan.channels) + 1 if narrow else ROW_MULTS))
+    mults = plan.row_multipliers
     if plan.row_serial:
         assert not narrow, "the narrow engine has every channel in a job"
         return row_engine_serial(m, w, plan.modes, rows, row_link, space, platform, flat,
