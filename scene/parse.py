@@ -171,8 +171,9 @@ MAX_SCENE_BYTES = 1 << 20      # a scene is a few hundred bytes; its mesh is a f
 
 def load(path):
     """Read and validate a scene file. Whatever the file holds, a failure is one
-    ``SceneError`` naming the file: tomllib's own limits (nesting past Python's recursion
-    limit) and sizes no scene needs are caught here, where the file is read."""
+    ``SceneError`` naming the file (and the key, where one is wrong): tomllib's own limits
+    (nesting past Python's recursion limit, an integer past Python's 4,300 digits) and sizes
+    no scene needs are caught here, where the file is read."""
     path = Path(path)
     try:
         with open(path, "rb") as f:
@@ -189,7 +190,19 @@ def load(path):
     except RecursionError:
         raise SceneError(f"{path}: not a valid scene file: arrays or tables nested too "
                          f"deeply to read") from None
-    return parse(data, path.stem, path.parent)
+    except Exception as e:         # any other limit of the reader's (an integer of 4,301
+        #                            digits or more: Python's int conversion limit)
+        raise SceneError(f"{path}: not a readable scene file: {_first_line(e)}") from None
+    try:
+        return parse(data, path.stem, path.parent)
+    except SceneError as e:        # the key's message, behind the file's name
+        raise SceneError(f"{path}: {e}") from None
+
+
+def _first_line(e):
+    """An exception's message, one line, at most 160 characters."""
+    text = (str(e).splitlines() or [type(e).__name__])[0]
+    return text if len(text) <= 160 else text[:157] + "..."
 
 
 def _mesh_file(msh, base):

@@ -82,15 +82,29 @@ def test_bad_scenes_name_the_key(text, message):
 
 
 def test_bad_files_exit_2_without_a_traceback(tmp_path):
+    """Whatever a scene file holds, its failure is one line naming the file (and the key,
+    where one is wrong), exit 2: among them an integer past Python's 4,300-digit conversion
+    limit, which tomllib raises as a plain ValueError, and a float of as many digits (inf)."""
     (tmp_path / "bad.toml").write_text("[material\nshininess = 3")
     (tmp_path / "nan.toml").write_text("[material]\nshininess = nan")
-    for path, msg in ((tmp_path / "bad.toml", "not a valid TOML file"),
-                      (tmp_path / "nan.toml", "material.shininess: must be a finite number"),
-                      (tmp_path / "missing.toml", "cannot read the scene file")):
+    (tmp_path / "long_int.toml").write_text("[image]\nwidth = " + "1" * 4301)
+    (tmp_path / "long_top.toml").write_text("width = " + "1" * 5000)
+    (tmp_path / "long_float.toml").write_text("[material]\nambient = " + "1" * 4301 + ".5")
+    (tmp_path / "deep.toml").write_text("a = " + "[" * 5000 + "]" * 5000)
+    for name, msg in (("bad", "not a valid TOML file"),
+                      ("nan", "material.shininess: must be a finite number"),
+                      ("missing", "cannot read the scene file"),
+                      ("long_int", "not a readable scene file: Exceeds the limit (4300 digits)"),
+                      ("long_top", "not a readable scene file: Exceeds the limit (4300 digits)"),
+                      ("long_float", "material.ambient: must be a finite number in 0..1, not inf"),
+                      ("deep", "nested too deeply")):
+        path = tmp_path / f"{name}.toml"
         r = subprocess.run([sys.executable, "-m", "sim", "render", str(path), "--simulator",
                             "amaranth", "--out", str(tmp_path / "o")],
                            capture_output=True, text=True)
-        assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr, r.stderr
+        assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+        assert r.stderr.splitlines() == [f"error: {path}: " + r.stderr.split(f"{path}: ", 1)[1]
+                                         .rstrip("\n")] and msg in r.stderr, r.stderr
 
 
 # ---- composition -----------------------------------------------------------------------------
