@@ -54,12 +54,14 @@ SMALL = {"screen_bits": 4, "bump_size": 16, "cache_lines": 2, "cache_ways": 1,
 
 
 def pipelines():
-    """One pipeline per shading method and per bump method, as the stage list has them
-    (``scene.pipeline``'s ``METHODS`` and ``BUMPS``); a bump method's texture filtered
-    bilinear where its stages take that (four banks: the memory join at its widest)."""
-    from scene.pipeline import BUMPS, METHODS, ScenePipeline
-    out = {f"scene_{m}": {"method": m} for m in METHODS}
-    for bump in BUMPS[1:]:
+    """One pipeline per shading method and per bump method, as the registered stages have
+    them when asked (``scene.registry``: a method of one's own too); a bump method's texture
+    filtered bilinear where its stages take that (four banks: the memory join at its
+    widest)."""
+    from scene import registry
+    from scene.pipeline import ScenePipeline
+    out = {f"scene_{m}": {"method": m} for m in registry.methods()}
+    for bump in registry.bumps()[1:]:
         q = {"bump": bump, "filter": "bilinear"}
         try:
             ScenePipeline.spec(**SMALL, **q)
@@ -68,8 +70,6 @@ def pipelines():
         out[f"scene_{bump}"] = q
     return out
 
-
-PIPELINES = pipelines()
 RASTER = {"screen_bits": 4, "channels": 1}
 
 MUTANTS = {       # name: (what it breaks, the property that must catch it: one-row, many)
@@ -87,7 +87,7 @@ def targets():
     pipelines."""
     out = {n: (n, RASTER if n == "raster" else {}) for n in UNITS}
     out["raster_bmc"] = ("raster", RASTER)      # the whole raster's BMC: DEEP
-    out.update({n: ("scene", {**SMALL, **q}) for n, q in PIPELINES.items()})
+    out.update({n: ("scene", {**SMALL, **q}) for n, q in pipelines().items()})
     return out
 
 

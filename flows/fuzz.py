@@ -14,7 +14,7 @@ Scenes, by class:
 Each one is loaded and prepared as ``make render`` does, and its float model run: it must
 either give a clear error (one of the errors ``sim`` turns into one line and exit 2; for a
 malformed scene, naming the key) or a picture. Anything else is a traceback: a bug. Valid
-scenes of a few pipeline configurations (``RTL_CONFIGS``, so the simulator models stay
+scenes of a few pipeline configurations (``rtl_configs()``, so the simulator models stay
 cached) also go through the RTL on the batch path: the same pixels as the model, each within
 one level (tests/test_scenes.py's bound; phong with Fenney's power and fenney_polar: each
 fragment within its candidates, ``scene.models.candidates``),
@@ -44,7 +44,8 @@ import tomli_w
 from hypothesis import HealthCheck, given, seed as hseed, settings, strategies as st
 
 from scene import driver as S
-from scene.pipeline import BUMPS, METHODS, POWERS, STAGES, ScenePipeline
+from scene import registry
+from scene.pipeline import ScenePipeline
 
 from sim.verilog import BUILD
 
@@ -54,20 +55,20 @@ CLEAR = None        # the exception types ``sim.cli_common.user_errors`` reports
 RTL_SIZE = 64
 
 
-def _rtl_configs():
+def rtl_configs():
     """The pipeline configurations whose scenes also run through the RTL (their data varies
-    freely: it is loaded at run time, so each is one model), read from the stages: each
-    shading method and each bump method once, so that every stage and every raster mode is
+    freely: it is loaded at run time, so each is one model), read from the registered stages
+    when asked (a method of one's own too): each shading method and each bump method once, so that every stage and every raster mode is
     in one. The k-th shading method takes the power kinds in turn, one light and two in turn
     (one where its stages shade only one), and every third is diffuse only; a bump method
     takes the defaults and a map of 64 (as tests/ use: their models are shared)."""
-    out = {}
-    for k, m in enumerate(METHODS):
-        c = {"shading": {"method": m, "specular": k % 3 != 2, "power": POWERS[k % len(POWERS)]},
+    out, powers = {}, registry.powers()
+    for k, m in enumerate(registry.methods()):
+        c = {"shading": {"method": m, "specular": k % 3 != 2, "power": powers[k % len(powers)]},
              "lights": 1 + k % 2}
         out[m] = c if _valid(c) else {**c, "lights": 1}
-    for b in BUMPS[1:]:
-        out[b] = {"shading": dict(S.DEFAULTS["shading"]), "bump": {"method": b, "size": 64}}
+    for b in registry.bumps()[1:]:
+        out[b] = {"shading": dict(S.tables()[0]["shading"]), "bump": {"method": b, "size": 64}}
     return out
 
 
@@ -84,8 +85,6 @@ def _valid(c):
         return False
     return True
 
-
-RTL_CONFIGS = _rtl_configs()
 
 
 def _clear_errors():
@@ -129,9 +128,10 @@ def valid_scene(draw, config=None):
     n = draw(st.integers(1, 4))
     d["lights"] = [{"to_light": draw(vec3(-1, 1).filter(lambda v: any(v))),
                     "color": draw(vec3(0, 2))} for _ in range(n)]
-    d["shading"] = {"method": draw(st.sampled_from(METHODS)), "specular": draw(st.booleans()),
-                    "power": draw(st.sampled_from(POWERS))}
-    bump = draw(st.sampled_from(BUMPS + ("none", "none", "none")))
+    d["shading"] = {"method": draw(st.sampled_from(tuple(registry.methods()))),
+                    "specular": draw(st.booleans()),
+                    "power": draw(st.sampled_from(registry.powers()))}
+    bump = draw(st.sampled_from(registry.bumps() + ("none", "none", "none")))
     if bump != "none":
         d["bump"] = {"method": bump, "map": draw(st.sampled_from(["flat", "bricks", "dimples"])),
                      "size": draw(st.sampled_from([16, 32, 64, 128])),
@@ -140,7 +140,7 @@ def valid_scene(draw, config=None):
             d["bump"][key] = draw(st.sampled_from(options))  # the rotation; a filter that
             #                                                  its texels refuse: an error)
     if config:                                  # an RTL configuration: its effects, our data
-        c = RTL_CONFIGS[config]
+        c = rtl_configs()[config]
         d["shading"] = dict(c["shading"])
         want = c.get("lights", 1)          # each light its own direction and colour
         d["lights"] = (d["lights"] + [{"to_light": draw(vec3(-1, 1).filter(lambda v: any(v))),
@@ -158,7 +158,7 @@ def _bump_choices(bump):
     """[bump]'s keys that the stages wanted for the bump method ``bump`` give a choice or a
     switch: ``{key: options}``."""
     out, q = {}, {**ScenePipeline.PARAMS, "bump": bump}
-    for cls in (cls for cls in STAGES if cls.wanted(q)):
+    for cls in (cls for cls in registry.stages() if cls.wanted(q)):
         for key, (_, rule) in cls.scene_keys.get("bump", {}).items():
             if rule[0] in ("choice", "bool"):
                 out[key] = rule[1] if rule[0] == "choice" else (False, True)
@@ -283,7 +283,7 @@ def malformed_scene(draw, tmp, kinds=MALFORMED):
             base.pop("bump", None)
             path = "mesh.file"
         else:
-            base["bump"] = {"method": draw(st.sampled_from(BUMPS[1:])), "map": str(f)}
+            base["bump"] = {"method": draw(st.sampled_from(registry.bumps()[1:])), "map": str(f)}
             path = "bump.map"
     return kind, tomli_w.dumps(base), path
 
@@ -374,7 +374,7 @@ def rtl_check(prep):
 
 def fuzz_scenes(n, seed, tmp, rtl=0, log=None, detail=None, configs=None, kinds=None):
     """``n`` generated scenes (a third valid, the rest malformed; ``kinds``: of these classes
-    only, "hard" the valid ones) and ``rtl`` valid ones of ``RTL_CONFIGS`` (or of
+    only, "hard" the valid ones) and ``rtl`` valid ones of ``rtl_configs()`` (or of
     ``configs``, some of them) through the RTL. Returns ``(counts, failures)``: counts by
     (class, outcome); failures: ``[(class, what, text)]``."""
     counts, failures = Counter(), []
@@ -421,7 +421,7 @@ def fuzz_scenes(n, seed, tmp, rtl=0, log=None, detail=None, configs=None, kinds=
         @settings(max_examples=rtl, database=None, deadline=None,
                   suppress_health_check=list(HealthCheck))
         @hseed(seed + 1)
-        @given(st.sampled_from(list(configs or RTL_CONFIGS)).flatmap(
+        @given(st.sampled_from(list(configs or rtl_configs())).flatmap(
             lambda c: st.tuples(st.just(c), valid_scene(c))))
         def through_rtl(case):
             config, data = case
@@ -607,7 +607,7 @@ def main(argv=None):
                file=sys.stderr)
     if args.rtl:
         from sim.batch import build
-        for config in RTL_CONFIGS:          # the models first, each once
+        for config in rtl_configs():        # the models first, each once
             build("scene", _config_params(config))
     sc, sf = fuzz_scenes(args.scenes, args.seed, tmp, args.rtl, log=lambda: bar.update(1))
     nc, nf = fuzz_npz(args.npz, args.seed, tmp / "npz", log=lambda: bar.update(1))
@@ -630,7 +630,7 @@ def main(argv=None):
 
 def _config_params(config):
     """The pipeline parameters of an RTL configuration (its model's key)."""
-    return S.pipeline_params(S.parse(_config_scene(RTL_CONFIGS[config]), "config"))
+    return S.pipeline_params(S.parse(_config_scene(rtl_configs()[config]), "config"))
 
 
 if __name__ == "__main__":

@@ -42,7 +42,7 @@ import numpy as np
 
 from hdl.span_unit.plan import ROW_MULTS
 from scene.parse import load
-from scene.pipeline import METHODS, STAGES
+from scene import registry
 from sim.cli_common import UsageError, user_errors
 from sim.jobs import run
 from sim.verilog import BUILD, SCENES
@@ -97,19 +97,22 @@ def configurations(quick=False, knobs=None):
     def unit_raster(size=None, **hw):
         return {"name": "raster", "params": raster(size, **hw)[0][1], "rows": 40}
     rows = []
-    # shading method: each method's scene (scenes/<method>.toml, or the default scene for
-    # its own), its pipeline; its accuracy measured on the stage that gives the method (phong)
-    # or on the raster
+    # shading method: each registered method's scene (scenes/<method>.toml, or the default
+    # scene, with the method set where it is not the default's), its pipeline; its accuracy
+    # measured on the unit of the stage that gives the method (phong) or on the raster
+    from hdl.units import UNITS
     default = load(SCENES / "default.toml")["shading"]["method"]
-    for m in METHODS:
-        scene = "default" if m == default else m
-        if not (SCENES / f"{scene}.toml").exists():
-            continue                      # a method with no scene of its own is not swept
-        parts = [[n, p] for n, p in _scene_parts(scene) if n != "texture"]
-        owner = next((s.name for s in STAGES if s.when.get("method") == m), None)
-        unit = ({"name": owner, "params": {}, "rows": 4000} if owner else
-                {"name": "raster", "params": dict(parts[0][1]), "rows": 40})
-        rows.append(_row("shading", m, parts, scene=scene, unit=unit, default=m == default))
+    for m in registry.methods():
+        own = m != default and (SCENES / f"{m}.toml").exists()
+        scene, hw = (m, {}) if own else ("default", {} if m == default else {"method": m})
+        parts = [[n, p] for n, p in _scene_parts(scene, hw) if n != "texture"]
+        if any(n not in UNITS for n, _ in parts):  # a stage with no unit of its own: the
+            parts = [["scene", _scene_params(scene, hw)]]      # pipeline is the design
+        owner = next((s.name for s in registry.stages() if s.when.get("method") == m), None)
+        unit = ({"name": owner, "params": {}, "rows": 4000} if owner in UNITS else
+                None if owner else {"name": "raster", "params": dict(parts[0][1]), "rows": 40})
+        rows.append(_row("shading", m, parts, scene=scene, hardware=hw, unit=unit,
+                         default=m == default))
     # the raster's widths, derived from the screen size (VALUE's 14 fraction bits out): the
     # default scene rendered at each size
     for bits in (6, 8, 10):
@@ -162,7 +165,7 @@ def configurations(quick=False, knobs=None):
                          raster(**hw), scene="default", hardware=hw, unit=unit_raster(**hw),
                          default=n == 0))
     # each stage's own rows (Stage.sweeps): its units' settings, in the stages' order
-    sweeps = [sw for cls in STAGES for sw in cls.sweeps()]
+    sweeps = [sw for cls in registry.stages() for sw in cls.sweeps()]
     if quick:       # no raster: a few minutes
         sweeps, rows = [sw for sw in sweeps if sw.quick], []
     rows += [_sweep_row(sw) for sw in sweeps]

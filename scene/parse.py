@@ -7,9 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import obj
-from . import pipeline
-from .pipeline import BUMPS, METHODS, POWERS, ScenePipeline, choose
+from . import obj, registry
+from .pipeline import ScenePipeline, choose
 from .stage import SceneError
 
 __all__ = ["SceneError", "DEFAULTS", "RULES", "tables", "parse", "load", "pipeline_params"]
@@ -25,9 +24,9 @@ DEFAULTS = {
                  "shininess": 32.0},
     "lights": [{"type": "directional", "to_light": [-1.0, -1.0, 2.0],
                 "color": [1.0, 1.0, 1.0]}],
-    # [shading]'s choices are the stages' (scene.pipeline), the first the default
-    "shading": {"method": METHODS[0], "specular": True, "power": POWERS[0]},
-    "bump": {"method": "none"},       # the rest of [bump]: the bump stages' scene_keys
+    # [shading] and [bump]'s method: the stages' choices, filled in by ``tables()``; the rest
+    # of [bump]: the bump stages' scene_keys
+    "shading": {}, "bump": {},
     "turntable": {"spin": "light", "axis": [0.0, 0.0, 1.0], "degrees": 360.0, "frames": 24,
                   "frame": 0},
 }
@@ -49,9 +48,7 @@ RULES = {
                  "shininess": ("num", 1.0, INF)},
     "lights": {"type": ("choice", ("directional",)), "to_light": ("vec", 3, -INF, INF),
                "color": ("vec", 3, 0.0, 2.0)},
-    "shading": {"method": ("choice", METHODS), "specular": ("bool",),
-                "power": ("choice", POWERS)},
-    "bump": {"method": ("choice", BUMPS)},
+    "shading": {}, "bump": {},
     "turntable": {"spin": ("choice", ("light", "mesh")), "axis": ("vec", 3, -INF, INF),
                   "degrees": ("num", -INF, INF), "frames": ("int", 1, 100000),
                   "frame": ("int", 0, 100000)},
@@ -59,12 +56,19 @@ RULES = {
 
 
 def tables():
-    """``(defaults, rules)`` of every scene table: the ones above, and each stage's own keys
-    (its ``scene_keys``: ``{table: {key: (default, rule)}}``), read from the stage list as it
-    is now, so a new stage's keys are parsed, checked and fuzzed with no edit here."""
+    """``(defaults, rules)`` of every scene table: the ones above, the choices of
+    ``shading.method``, ``shading.power`` and ``bump.method`` (the registered stages', the
+    first the default), and each stage's own keys (its ``scene_keys``: ``{table: {key:
+    (default, rule)}}``), read from the stages as they are now, so a new stage's keys and
+    choices are parsed, checked and fuzzed with no edit here."""
     defaults = {t: dict(v) if isinstance(v, dict) else v for t, v in DEFAULTS.items()}
     rules = {t: dict(v) for t, v in RULES.items()}
-    for cls in pipeline.STAGES:
+    ch = registry.choices()
+    defaults["shading"] = {"method": ch["method"][0], "specular": True, "power": ch["power"][0]}
+    rules["shading"] = {"method": ("choice", ch["method"]), "specular": ("bool",),
+                        "power": ("choice", ch["power"])}
+    defaults["bump"], rules["bump"] = {"method": "none"}, {"method": ("choice", ch["bump"])}
+    for cls in registry.stages():
         for table, keys in cls.scene_keys.items():
             for key, (default, rule) in keys.items():
                 defaults.setdefault(table, {})[key] = default
@@ -137,7 +141,7 @@ def parse(data, name="scene", base=None):
         else:
             scene[key] = _table(key, data.get(key, {}), defaults[key], rules[key])
     _mesh_file(scene["mesh"], base)
-    for cls in pipeline.STAGES:       # a stage's keys set where it is not called for
+    for cls in registry.stages():     # a stage's keys set where it is not called for
         cls.check_scene(scene)
     turn = scene["turntable"]
     if not any(turn["axis"]):
@@ -234,7 +238,7 @@ def pipeline_params(scene, bump_size=None, hardware=None):
     if b["method"] != "none":
         pipe.update(bump=b["method"], bump_size=bump_size or b["size"], filter=b["filter"])
     q = {**ScenePipeline.PARAMS, **pipe}
-    for cls in pipeline.STAGES:     # the scene keys a stage reads for its build
+    for cls in registry.stages():   # the scene keys a stage reads for its build
         if cls.wanted(q):
             q.update(cls.scene_params(scene))
     return q

@@ -9,13 +9,15 @@ next by an ``amaranth.lib.stream`` (``wiring.connect``).
                                                                       stage gives powers)
                         -> colour -> fragments (tri, x, y, depth, r, g, b)
 
-``STAGES`` is the one place where the stages are chosen: each says itself whether a scene
-wants it (``scene/stages/``, one file each; README "Adding an effect"). The raster's
+The registered stages (``scene.registry``: the project's own in ``scene/stages/``, one file
+each, and any registered from outside; README "Adding an effect or a method") are the one
+place where the stages are chosen: each says itself whether a scene wants it. The raster's
 channels are the ones its stages read, in the order of the list, depth first; its flat words
 are theirs too. A scene's data is written at run time through the host port, rows of the
 input stream beside the triangles (``scene/host.py``): lights, material colours and the
 concentration into registers, the power tables and the on-chip texture into RAMs. So the
-hardware depends only on the effects and the sizes, never on the data. The depth test and the framebuffer are not here: they model
+hardware depends only on the effects and the sizes, never on the data. The depth test and
+the framebuffer are not here: they model
 external memory (a 256 x 256 frame with depth is 2.6 Mbit, more than the 1 Mbit of block RAM
 of an ECP5-25F), and the renderer keeps them.
 """
@@ -24,43 +26,45 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
 from hdl.fixed import Field
-from hdl.setup_unit.formats import MODES, VALUE
+from hdl.setup_unit.formats import VALUE
 from hdl.shade_unit.formats import LEVEL, RGB
 from hdl.span_unit import Raster as RasterUnit
 from hdl.unit import Unit, skid
 from hdl.units import PIPELINES
 
-from . import host
+from . import host, registry
+from .registry import register, registered, stages, unregister
 from .stage import StageUnit
-from .stages.bump_polar import BumpPolar
-from .stages.colour import Colour
-from .stages.fenney_dot import FenneyDot
-from .stages.fenney_polar import FenneyPolar
-from .stages.phong import Phong
-from .stages.fenney_power import FenneyPower
-from .stages.power_table import PowerTable
-from .stages.raster import Raster
-from .stages.texel_decode import TexelDecode
-from .stages.texture import Texture
 
-__all__ = ["ScenePipeline", "STAGES", "METHODS", "BUMPS", "wanted", "choose", "units_in"]
+__all__ = ["ScenePipeline", "register", "registered", "unregister", "stages", "wanted",
+           "choose", "units_in"]
 
-STAGES = (Raster, Texture, TexelDecode, FenneyDot, FenneyPolar, BumpPolar, Phong, PowerTable,
-          FenneyPower, Colour)
-
-
-def _choices(key):
-    return tuple(dict.fromkeys(s.when[key] for s in STAGES if key in s.when))
-
-
-# the keys that choose stages, their values read from the stages' ``when`` (the first is the
-# default): the shading methods (the raster's interpolation modes, and those a stage is wanted
-# for), the power kinds and the bump methods
-METHODS = MODES + _choices("method")
-POWERS = _choices("power")
-BUMPS = ("none",) + _choices("bump")
 MAX_CHANNELS = RasterUnit.RANGES["channels"][1]
 SOURCE = {"x": "_pix_x", "y": "_pix_y"}          # the fragment's pixel, as the stages carry it
+
+
+class _FromStages:
+    """A class attribute computed from the registered stages each time it is read, so a stage
+    registered after import is seen (``scene.registry``)."""
+
+    def __init__(self, fn):
+        self.fn = fn
+
+    def __get__(self, obj, owner=None):
+        return self.fn()
+
+
+def _params():
+    own = registry.build_params()
+    return {"screen_bits": 8, "sub_bits": 4, "lights": 1, "specular": True,
+            **{k: v[0] for k, v in registry.choices().items()},
+            **{k: d for k, (d, _) in own.items()}}
+
+
+def _ranges():
+    own = registry.build_params()
+    return {"screen_bits": (4, 10), "sub_bits": (1, 8), "lights": (1, 4), **registry.choices(),
+            **{k: r for k, (_, r) in own.items() if r is not None}}
 
 
 class ScenePipeline(Unit):
@@ -69,13 +73,10 @@ class ScenePipeline(Unit):
     # Its parameters are the effects and the sizes; a scene's data (lights, material, tables,
     # the bump map) is loaded through the host port, so two scenes that differ only in their
     # data share one Verilog and one model. Beside the sizes and the choices, each stage's
-    # own (``Stage.build_params``).
-    CHOICES = {"method": METHODS, "power": POWERS, "bump": BUMPS}
-    OWN = {k: v for s in STAGES for k, v in s.build_params.items()}
-    PARAMS = {"screen_bits": 8, "sub_bits": 4, "lights": 1, "specular": True,
-              **{k: v[0] for k, v in CHOICES.items()}, **{k: d for k, (d, _) in OWN.items()}}
-    RANGES = {"screen_bits": (4, 10), "sub_bits": (1, 8), "lights": (1, 4), **CHOICES,
-              **{k: r for k, (_, r) in OWN.items() if r is not None}}
+    # own parameters, all read from the registered stages when asked.
+    PARAMS = _FromStages(_params)
+    RANGES = _FromStages(_ranges)
+
     def validate(self, **q):
         self.stages = choose(q)
         self.stream_ports = {name: port for s in self.stages for name, port in s.ports.items()}
@@ -196,7 +197,7 @@ def wanted(q):
     stage that steps aside (``defers``) where a stage before it gives the same values is left
     out: bump_polar gives the powers from its own table, so no power stage follows it."""
     out, given = [], set()
-    for cls in STAGES:
+    for cls in stages():
         if cls.wanted(q) and not (cls.defers and set(cls.gives) <= given):
             out.append(cls(q))
             given |= set(cls.gives)
@@ -207,7 +208,11 @@ def choose(q):
     """The stages that the pipeline's parameters ``q`` call for, each validated, the raster
     joined to the channels and flat words they read. A ``ValueError`` names the scene key."""
     stages = wanted(q)
-    stages[0].given = {g for stage in stages[1:] for g in stage.gives}
+    raster = stages[0]
+    raster.given = {g for stage in stages[1:] for g in stage.gives}
+    # the mode N.L and N.H are interpolated in: the method's stage's, or the raster's own
+    raster.mode = next((s.interpolates for s in stages if s.interpolates),
+                       registry.methods().get(q["method"]))
     for stage in stages:
         stage.validate(q)
     channels = [c for stage in stages for c in stage.channels]

@@ -1,53 +1,33 @@
 """A scene stage: one object that says everything about one step of a scene's pipeline.
 
-A stage subclasses :class:`Stage` and supplies
+A stage subclasses :class:`Stage`, whose hooks come in groups, one class each, by role:
 
-- ``when`` (the parameters' values that call for it), or ``wanted(q)``: whether a scene
-  (the pipeline's parameters ``q``) calls for it; ``gives``: kinds of value only one stage
-  gives (``"lighting"``, ``"powers"``), and ``defers``: it is left out where a stage before
-  it gives them;
-- ``name``: its submodule's name in the composed top, and its unit's in ``metrics.json``;
-- ``channels``: the raster channels it reads, ``(name, mode, group)``; ``channel_bits``:
-  the fraction bits it needs of some of them (``{name: bits}``; the rest keep VALUE's 14),
-  the raster's ``precision``;
-  ``flat``: the names of the flat words (a triangle's constants) it reads from the raster;
-- ``uniforms``: the registers it reads (the host writes them: ``scene/host.py``), and
-  ``uniform_values(scene, L, H)``: their raw values for a scene (``L``, ``H``: each light's
-  unit vectors, world frame);
-- ``tables``: the RAMs the host loads (``{key: lut}``, the lut giving depth and format; the
-  key ``texture`` is the on-chip texture), and ``table_values(scene)``: their contents;
-- ``params``: its unit's parameters, from the scene's; ``why``: the scene key that calls for it;
-- ``build_params``: the pipeline's parameters it owns, ``{name: (default, range)}`` (a
-  range as ``hdl.unit``'s ``RANGES``; None for a bool): ``scene.pipeline`` gathers them;
-- ``sweeps()``: its rows of ``make tradeoffs`` (:class:`Sweep`), what accuracy costs in it;
-- ``validate(q)``: its checks on the scene, raising ``ValueError`` that names the scene key;
-- ``latency``: its register stages, from its units;
-- ``rtl(p, v, uni)``: its stages on the :class:`hdl.unit.Pipeline` ``p``, from the values
-  ``v`` of the stage before it (named as the stages name them); returns the values after it.
-  A stage whose latency varies (a memory read) has ``build`` instead, with handshakes of its
-  own, and ``ports``: the streams it adds to the top (its memory port); ``host``: the loaded
-  tables' write buses (``hdl.lut.WriteBus``), by key;
-- ``model(prep, frag, ch, bound)``: the same step in the float or integer model, on numpy
-  arrays per fragment; ``bound``: the tests' offsets, each stage takes the ones it knows;
-  ``candidates``, ``interval`` and ``bounds``: how far the RTL may be from it (the tests'
-  and ``make fuzz``'s checks, ``scene.models.within``);
-  ``ideal(prep, frag, ch)``: its algorithm on reals; ``format_group``: the group of formats
-  it belongs to (``scene.models.ideal``); ``convert(ch, ideal)``: the values it gives, from
-  its model's formats to its ideal's reals (or back), for the stage after it;
+====================  =====================================  ==============================
+group                 required                               optional
+====================  =====================================  ==============================
+:class:`Choosing`     ``name``                               ``when``/``wanted``, ``gives``,
+                                                             ``defers``, ``before``,
+                                                             ``interpolates``, ``why``
+:class:`SceneKeys`                                           ``scene_keys``,
+                                                             ``check_scene``, ``scene_params``
+:class:`DriverData`                                          ``prepare``, ``vertex_values``,
+                                                             ``triangle_values``,
+                                                             ``flat_values``, ``memory_image``,
+                                                             ``uniform_values``,
+                                                             ``table_values``
+:class:`Hardware`     ``latency``, ``rtl`` (or ``build``)    ``channels``, ``channel_bits``,
+                                                             ``flat``, ``uniforms``,
+                                                             ``tables``, ``params``,
+                                                             ``build_params``, ``ports``
+:class:`Models`       ``model``, ``ideal``                   ``format_group``, ``convert``,
+                                                             ``bounds``, ``candidates``,
+                                                             ``interval``, ``slack``
+:class:`BumpHooks`                                           ``bump``, ``lanes``, ``label``
+:class:`Tools`                                               ``sweeps``, ``describe``
+====================  =====================================  ==============================
 
-and, for the scene driver (``scene/prepare.py``), which never names a stage:
-
-- ``scene_keys``: its own keys of the scene file, ``{table: {key: (default, rule)}}`` (the
-  rules of ``scene/parse.py``), a table of its own or keys in a shared one;
-- ``scene_params(scene)``: the build parameters its scene keys set, and
-  ``check_scene(scene)``: its keys' checks on any scene (classmethods);
-- ``prepare(scene, view, data)``: its data for a scene (encodings, per-triangle constants),
-  given the view (``scene.prepare.view``) and the data of the stages before it; it may set
-  a size the data decides in ``self.q``; ``prep["data"]`` holds them all for its models;
-- ``vertex_values(data)``: its channels' values at the drawn triangles' vertices,
-  ``{name: (n, 3)}``; ``triangle_values(data)``: raster inputs of its own per triangle (edge
-  constants), raw and unrounded; ``flat_values(data)``: its flat words, ``{name: (n,)}``;
-- ``memory_image(data)``: the texture memory's words, where it has a texture.
+A stage joins the pipeline by ``scene.registry.register`` (or its entry point, or
+``SHADING_STAGES``), which checks the required hooks and names the one missing.
 
 :class:`StageUnit` makes a stage a component with ``i`` and ``o`` streams, so the composed top
 joins stages with ``wiring.connect``. Inside a stage the units share one enable (the
@@ -67,12 +47,17 @@ from hdl.unit import Pipeline
 
 from . import host as hostport
 
-__all__ = ["Stage", "StageUnit", "Sweep", "Link", "SceneError", "convert_powers", "lanes", "lane_key",
+__all__ = ["Stage", "Choosing", "SceneKeys", "DriverData", "Hardware", "Models",
+           "BumpHooks", "Tools", "StageUnit", "StageError", "Sweep", "Link", "SceneError", "convert_powers", "lanes", "lane_key",
            "raw"]
 
 
 class SceneError(ValueError):
     """A scene file that cannot be rendered: the message names the key."""
+
+
+class StageError(ValueError):
+    """A stage that cannot join the pipeline: the message names the stage and the hook."""
 
 
 @dataclass(frozen=True)
@@ -100,60 +85,120 @@ class Sweep:
                              f"needs a scene")
 
 
-class Stage:
+class Choosing:
+    """Whether a scene calls for the stage, what it gives and where it goes.
+
+    - ``name`` (required): its submodule's name in the composed top, and its unit's in
+      ``metrics.json``;
+    - ``when``: the pipeline parameters' values that call for it (all of them; ``{}``: every
+      scene), or ``wanted(q)``. A value of ``method``, ``power`` or ``bump`` named here is a
+      new choice of that scene key (``scene.registry``);
+    - ``gives``: kinds of value only one stage gives (``"lighting"``: N.L and N.H, which the
+      raster then does not interpolate; ``"powers"``), and ``defers``: it is left out where
+      a stage before it gives them;
+    - ``interpolates``: a shading method's stage that lets the raster interpolate N.L and
+      N.H says in which of the raster's modes (``hdl.setup_unit.formats.MODES``);
+    - ``before``: the name of the stage it goes before (None: after the last);
+    - ``why``: the scene key that calls for it, for ``metrics.json``."""
     name = None
-    bump = False           # a bump stage: texel fetch to N.L and N.H
-    channels = ()
-    channel_bits = {}
-    flat = ()
-    uniforms = ()
-    params = {}
-    build_params = {}
     why = ""
-    scene_keys = {}
-    gives = ()             # kinds of value it gives that one stage gives at most ("powers")
-    defers = False         # left out where a stage before it gives the same
-
-    def __init__(self, q):
-        self.q = q
-
-    when = {}              # the parameters' values that call for the stage (all of them)
+    when = {}
+    gives = ()
+    defers = False
+    before = None
+    interpolates = None
 
     @classmethod
     def wanted(cls, q):
         """Whether a scene (the pipeline's parameters ``q``) calls for the stage."""
         return all(q[k] == v for k, v in cls.when.items())
 
-    @property
-    def lanes(self):
-        """The bump stages' lanes: ``(vector, light)``, L per light and, with specular, H."""
-        return lanes(self.q)
-
     def validate(self, q):
-        """Checks on the scene beyond the parameters' ranges."""
+        """Checks on the scene beyond the parameters' ranges, raising ``ValueError`` that
+        names the scene key."""
 
-    def uniform_values(self, scene, L, H):
+
+class SceneKeys:
+    """Its own keys of the scene file (``scene/parse.py``)."""
+    scene_keys = {}        # {table: {key: (default, rule)}}: a table of its own or keys in
+    #                        a shared one, with the rules of scene/parse.py
+
+    @classmethod
+    def check_scene(cls, scene):
+        """Checks of its scene keys on every scene, wanted or not (a key set for nothing)."""
+
+    @classmethod
+    def scene_params(cls, scene):
+        """The build parameters its scene keys set."""
         return {}
 
-    tables = {}            # key: lut (its shape): the RAMs the host loads
+
+class DriverData:
+    """Its data for a scene (``scene/prepare.py``, which never names a stage)."""
+
+    def prepare(self, scene, view, data):
+        """Its data (encodings, per-triangle constants), given the view (``scene.prepare
+        .view``) and the data of the stages before it; it may set a size the data decides in
+        ``self.q``; ``prep["data"]`` holds them all for its models."""
+        return {}
+
+    def vertex_values(self, data):
+        """Its channels' values at the drawn triangles' vertices, ``{name: (n, 3)}``."""
+        return {}
+
+    def triangle_values(self, data):
+        """Raster inputs of its own per triangle (edge constants), raw and unrounded."""
+        return {}, {}
+
+    def flat_values(self, data):
+        """Its flat words, ``{name: (n,)}``."""
+        return {}
+
+    def memory_image(self, data):
+        """The texture memory's words, where it has a texture."""
+        return None
+
+    def uniform_values(self, scene, L, H):
+        """Its registers' raw values for a scene (``L``, ``H``: each light's unit vectors,
+        world frame)."""
+        return {}
 
     def table_values(self, scene):
         """The loaded tables' contents for a scene: ``{key: raw integers}``."""
         return {}
 
+
+class Hardware:
+    """Its RTL.
+
+    - ``latency`` (required): its register stages, from its units;
+    - ``rtl(p, v, uni)`` (required, or ``build``): its stages on the
+      :class:`hdl.unit.Pipeline` ``p``, from the values ``v`` of the stage before it (named
+      as the stages name them) and its uniforms ``uni``; returns the values after it;
+    - ``build``: instead of ``rtl``, for a stage whose latency varies (a memory read), with
+      handshakes of its own, and ``ports``: the streams it adds to the top;
+    - ``channels``: the raster channels it reads, ``(name, mode, group)``, each mode one of
+      the raster's; ``channel_bits``: the fraction bits it needs of some (``{name: bits}``;
+      the rest keep VALUE's 14); ``flat``: the flat words (a triangle's constants) it reads;
+    - ``uniforms``: the registers it reads (the host writes them: ``scene/host.py``);
+      ``tables``: the RAMs the host loads (``{key: lut}``; ``texture``: the on-chip texture);
+    - ``params``: its unit's parameters; ``build_params``: the pipeline's parameters it owns,
+      ``{name: (default, range)}`` (a range as ``hdl.unit``'s ``RANGES``; None for a bool)."""
+    channels = ()
+    channel_bits = {}
+    flat = ()
+    uniforms = ()
+    tables = {}
+    params = {}
+    build_params = {}
+    ports = {}             # name: (In or Out, fields): streams of the stage's own
+
     @property
     def latency(self):
         raise NotImplementedError
 
-    ports = {}             # name: (In or Out, fields): streams of the stage's own
-
     def rtl(self, p, v, uni):
         raise NotImplementedError
-
-    def ideal(self, prep, frag, ch):
-        """The stage's algorithm in float64 with no format: exact functions for its tables,
-        no rounding or saturation (``scene.models.ideal``); values by name, reals."""
-        raise NotImplementedError(f"{self.name}: no ideal model")
 
     def build(self, m, i, o, v, uni, ports, host, platform=None):
         """The stage's logic between the handshakes ``i`` and ``o`` (``Link``s); returns
@@ -172,45 +217,36 @@ class Stage:
             busy = busy | valid
         return v, busy
 
+
+class Models:
+    """The same step in the models, and how far the RTL may be from them.
+
+    - ``model(prep, frag, ch, bound)`` (required): with the RTL's formats, on numpy arrays per
+      fragment; ``bound``: the tests' offsets, each stage takes the ones it knows;
+    - ``ideal(prep, frag, ch)`` (required): its algorithm on reals (``ideal.png``);
+      ``format_group``: its group of formats (``scene.models.ideal``); ``convert``: the values
+      it gives, from its model's formats to its ideal's reals or back;
+    - ``bounds``, ``candidates``, ``interval``, ``slack``: how far the RTL may be from its
+      model (the tests' and ``make fuzz``'s checks, ``scene.models.within``)."""
+    format_group = "power"
+    slack = 0              # levels the RTL may be from the nearest of its candidates
+
     def model(self, prep, frag, ch, bound):
         raise NotImplementedError
 
-    format_group = "power"
+    def ideal(self, prep, frag, ch):
+        """The stage's algorithm in float64 with no format: exact functions for its tables,
+        no rounding or saturation (``scene.models.ideal``); values by name, reals."""
+        raise NotImplementedError(f"{self.name}: no ideal model")
 
     def convert(self, ch, ideal):
         """The values it gives, its model's formats to reals (``ideal``) or back."""
         return ch
 
-    @classmethod
-    def check_scene(cls, scene):
-        """Checks of its scene keys on every scene, wanted or not (a key set for nothing)."""
-
-    @classmethod
-    def scene_params(cls, scene):
+    def bounds(self, prep, ch):
+        """Per value it gives and fragment, how far (VALUE LSBs) the RTL may be from its
+        model; none: exact."""
         return {}
-
-    def prepare(self, scene, view, data):
-        return {}
-
-    def vertex_values(self, data):
-        return {}
-
-    def triangle_values(self, data):
-        return {}, {}
-
-    def flat_values(self, data):
-        return {}
-
-    def memory_image(self, data):
-        return None
-
-    slack = 0              # levels the RTL may be from the nearest of its candidates
-
-    @property
-    def label(self):
-        """A few words on its form for the gallery (the last bump stage's names a bump
-        pipeline there), or None."""
-        return None
 
     def candidates(self, prep, frag, ch):
         """Where its bound is wider than a level of the model's colour: every colour the RTL
@@ -226,10 +262,25 @@ class Stage:
         ``dt``), the values as it takes them."""
         return None
 
-    def bounds(self, prep, ch):
-        """Per value it gives and fragment, how far (VALUE LSBs) the RTL may be from its
-        model; none: exact."""
-        return {}
+
+class BumpHooks:
+    """Only for the bump stages (texel fetch to N.L and N.H)."""
+    bump = False
+
+    @property
+    def lanes(self):
+        """The bump stages' lanes: ``(vector, light)``, L per light and, with specular, H."""
+        return lanes(self.q)
+
+    @property
+    def label(self):
+        """A few words on its form for the gallery (the last bump stage's names a bump
+        pipeline there), or None."""
+        return None
+
+
+class Tools:
+    """What the tools ask of it."""
 
     @classmethod
     def sweeps(cls):
@@ -240,6 +291,15 @@ class Stage:
         """The stage in ``metrics.json``: its unit, why, its parameters and latency."""
         return {"name": self.name, "why": self.why, "params": self.params,
                 "latency": self.latency}
+
+
+class Stage(Choosing, SceneKeys, DriverData, Hardware, Models, BumpHooks, Tools):
+    """A stage of a scene's pipeline, made for the pipeline's parameters ``q``."""
+    # the hooks a stage must give, each a tuple of alternatives (scene.registry checks them)
+    REQUIRED = (("latency",), ("rtl", "build"), ("model",), ("ideal",))
+
+    def __init__(self, q):
+        self.q = q
 
 
 class Link:

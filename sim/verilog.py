@@ -39,8 +39,8 @@ TARGETS = ("generic", "ecp5")      # iCE40: the generic form (synth_ice40 -dsp i
 
 def design_key(name, params):
     """``(key, tag)``: what names a unit's build in a model cache, and its 8-hex digest: the
-    parameters, and a scene pipeline's stages by name (the list may grow, an effect added
-    to ``STAGES``, with the parameters unchanged)."""
+    parameters, and a scene pipeline's stages by name (the list may grow, an effect
+    registered, with the parameters unchanged: ``scene.registry``)."""
     from scene.pipeline import ScenePipeline
     unit = make_unit(name, spec=True, **params)
     stages = [s.name for s in unit.stages] if isinstance(unit, ScenePipeline) else None

@@ -1,5 +1,5 @@
-"""The stage list (scene/pipeline.py): what each stage declares composes into the top, and a
-new effect is one file plus one line. The README's worked examples (``docs/examples/``: the
+"""The stage list (scene/registry.py): what each stage declares composes into the top, and a
+new effect is one file, registered. The README's worked examples (``docs/examples/``: the
 depth cue, and fog with a scene table and a channel of its own) are put after ``Colour`` and
 rendered, RTL against their models."""
 import importlib.util
@@ -44,25 +44,25 @@ def test_latency_is_the_stages_sum(scene):
     assert units_in(ScenePipeline(**prep["params"])) == sorted(s.name for s in pipe.stages)
 
 
-def test_a_new_effect_is_one_file_and_one_line(monkeypatch):
+def test_a_new_effect_is_one_file_and_one_line():
     """The depth cue, added to the list: it is built (a submodule of its own, its uniform a
     port of the top), and the RTL's pixels are its model's on Amaranth's simulator, within
     the one level the default pipeline allows, and darker than without it."""
     cue = _example()
     data = {"image": {"width": 32, "height": 32}}
     plain = S.prepare(S.parse(data, "plain"))
-    monkeypatch.setattr(pipeline, "STAGES", pipeline.STAGES + (cue,))
-    prep = S.prepare(S.parse(data, "cue"))
+    with pipeline.registered(cue):
+        prep = S.prepare(S.parse(data, "cue"))
+        rtl, img, cov, info = _rtl_and_model(prep)
     assert [s.name for s in prep["pipeline"].stages][-2:] == ["colour", "depth_cue"]
     assert prep["uniforms"]["cue_near"] == 255
-    rtl, img, cov, info = _rtl_and_model(prep)
     assert info["latency"] == prep["pipeline"].latency == plain["pipeline"].latency + 2 + 1   # its own, a slice
     assert np.abs(rtl.astype(int) - img.astype(int))[cov].max() <= 1
     before, _, _ = S.model(plain)
     assert (img[cov].astype(int) <= before[cov]).all() and (img[cov] < before[cov]).any()
 
 
-def test_an_effect_with_its_own_scene_table_and_channel(monkeypatch):
+def test_an_effect_with_its_own_scene_table_and_channel():
     """Fog (``docs/examples/fog.py``), added by its file and one line: its ``[fog]`` table is
     parsed with its rules (an unknown key, a far before the near, named in one line), its fog
     factor rides the raster as a channel of its own, and the RTL's pixels are its model's
@@ -75,16 +75,16 @@ def test_an_effect_with_its_own_scene_table_and_channel(monkeypatch):
     with pytest.raises(S.SceneError, match=r"^fog: unknown table"):
         S.parse(data)                                        # not in the list yet
     plain = S.prepare(S.parse({"image": data["image"]}, "plain"))
-    monkeypatch.setattr(pipeline, "STAGES", pipeline.STAGES + (fog,))
-    with pytest.raises(S.SceneError, match=r"^fog\.density: unknown key \(known: near, far, color\)$"):
-        S.parse({"fog": {"density": 1.0}})
-    with pytest.raises(S.SceneError, match=r"^fog\.far: must be beyond fog\.near \(3\.4\), not 3$"):
-        S.prepare(S.parse({"fog": {"near": 3.4, "far": 3.0}}))
-    prep = S.prepare(S.parse(data, "fog"))
+    with pipeline.registered(fog):
+        with pytest.raises(S.SceneError, match=r"^fog\.density: unknown key \(known: near, far, color\)$"):
+            S.parse({"fog": {"density": 1.0}})
+        with pytest.raises(S.SceneError, match=r"^fog\.far: must be beyond fog\.near \(3\.4\), not 3$"):
+            S.prepare(S.parse({"fog": {"near": 3.4, "far": 3.0}}))
+        prep = S.prepare(S.parse(data, "fog"))
+        rtl, img, cov, _ = _rtl_and_model(prep)
     assert [s.name for s in prep["pipeline"].stages][-2:] == ["colour", "fog"]
     assert [n for n, _ in prep["pipeline"].channels][-1] == "fog"
     assert [prep["uniforms"][f"fog_{c}"] for c in "rgb"] == [255, 255, 255]
-    rtl, img, cov, _ = _rtl_and_model(prep)
     assert np.abs(rtl.astype(int) - img.astype(int))[cov].max() <= 1
     before, _, _ = S.model(plain)
     lifted = (img[cov].astype(int) - before[cov]).min(-1)

@@ -1,6 +1,6 @@
 """A new effect in one file: depth cueing, the colour dimmed with distance (README, "Adding an
-effect"). ``tests/test_stages.py`` puts it after ``Colour`` in ``scene.pipeline.STAGES`` and
-renders a scene through it, RTL against this model."""
+effect or a method"). ``tests/test_stages.py`` registers it (``scene.registry``: after
+the last stage, ``Colour``) and renders a scene through it, RTL against this model."""
 import numpy as np
 
 from hdl.fixed import Field, u
@@ -34,3 +34,9 @@ class DepthCue(Stage):
         depth = (raw(ch["depth"]) >> 6) & 511
         gain = (prep["uniforms"]["cue_near"] * depth) >> 8
         return {**ch, **{c: (np.asarray(ch[c], np.int64) * gain) >> 8 for c in RGB}}
+
+    def ideal(self, prep, frag, ch):
+        """The colour times near * depth on reals, rounded to 8 bits."""
+        gain = prep["uniforms"]["cue_near"] / 256 * np.asarray(ch["depth"], float)
+        return {**ch, **{c: np.rint(np.asarray(ch[c], float) * gain).astype(np.int64)
+                         for c in RGB}}

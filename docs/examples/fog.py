@@ -4,8 +4,8 @@ distance (README, "Adding an effect"). The scene's ``[fog]`` table gives ``near`
 f = clamp((far - z) / (far - near), 0, 1) rides the raster as a linear channel, and each
 pixel's colour is blended toward the fog's: c f + fog (1 - f).
 
-``tests/test_stages.py`` puts ``Fog`` after ``Colour`` in ``scene.pipeline.STAGES`` and
-renders a scene through it, RTL against this model. ``python docs/examples/fog.py OUT.png``
+``tests/test_stages.py`` registers ``Fog`` (``scene.registry``: after the last stage,
+``Colour``) and renders a scene through it, RTL against this model. ``python docs/examples/fog.py OUT.png``
 draws the default torus with and without it, through the RTL (Verilator's batch path)."""
 import numpy as np
 from amaranth.hdl import Mux
@@ -89,11 +89,10 @@ if __name__ == "__main__":
         sys.exit("usage: python docs/examples/fog.py OUT.png")
     image = {"width": 192, "height": 128}
     pictures = []
-    for stages, data in ((pipeline.STAGES, {"image": image}),
-                         (pipeline.STAGES + (Fog,), {"image": image,
-                                                     "fog": {"near": 3.2, "far": 5.0}})):
-        pipeline.STAGES = stages
-        prep = S.prepare(S.parse(data, "fog"))
-        pictures.append(run_rtl(prep, "verilator")[0])
+    for stages, data in (((), {"image": image}),
+                         ((Fog,), {"image": image, "fog": {"near": 3.2, "far": 5.0}})):
+        with pipeline.registered(*stages):
+            prep = S.prepare(S.parse(data, "fog"))
+            pictures.append(run_rtl(prep, "verilator")[0])
     Image.fromarray(np.concatenate(pictures, 1)).save(Path(sys.argv[1]))
     print(f"{sys.argv[1]}: the default torus through the RTL, without and with fog")

@@ -4,7 +4,7 @@ instantiates it and names its outputs for the stages after it (``rename``)."""
 import numpy as np
 
 from golden import raster as raster_model
-from hdl.setup_unit.formats import VALUE
+from hdl.setup_unit.formats import MODES, VALUE
 from hdl.shade_unit.formats import light_fields
 from hdl.span_unit import Raster as RasterUnit
 from hdl.span_unit.plan import KNOBS, RANGES, RECIPS, Channel, RasterPlan
@@ -16,20 +16,23 @@ class Raster(Stage):
     name = "raster"
     format_group = "raster"
 
+    methods = MODES       # its own shading methods: N.L and N.H interpolated in that mode
     given = ()            # what the stages after it give (``scene.pipeline.choose``)
+    mode = MODES[0]       # the mode it interpolates N.L and N.H in (``scene.pipeline.choose``)
     build_params = {"recip": (RECIPS[0], RECIPS),
                     "recip_iters": (2, RANGES["recip_iters"]),
                     **{k: (d, r) for k, (d, r, _) in KNOBS.items()}}   # the plan's knobs
 
     @property
     def channels(self):
-        """Its own: depth, and N.L and N.H per light interpolated by the shading method (seed
-        001), unless a stage after it gives the lighting (a bump method, phong's normal)."""
+        """Its own: depth, and N.L and N.H per light interpolated in the mode the shading
+        method's stage chooses (seed 001; the raster's own methods: their mode), unless a
+        stage after it gives the lighting (a bump method, phong's normal)."""
         q = self.q
         own = [("depth", "linear", 0)]
         if "lighting" not in self.given:
-            own += [(f.name, q["method"], 0) for f in light_fields(q["lights"], q["specular"],
-                                                                    "d", "s")]
+            own += [(f.name, self.mode, 0) for f in light_fields(q["lights"], q["specular"],
+                                                                  "d", "s")]
         return own
 
     def join(self, channels, flat, bits=None):
