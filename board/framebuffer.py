@@ -27,10 +27,19 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-__all__ = ["Framebuffer", "CLEAR", "MAX_WORDS", "fragment_layout", "plane_width"]
+__all__ = ["Framebuffer", "CLEAR", "MAX_WORDS", "MUTANTS", "fragment_layout", "plane_width"]
 
 CLEAR = -(1 << 15)
 MAX_WORDS = {"ulx3s-25f": 128 * 128, "ulx3s-85f": 256 * 256}
+# the forwarding's mutants, each one enable dropped or one priority swapped; the tests show
+# each caught (tests/test_board.py). Never built otherwise
+MUTANTS = {
+    "w_enable": "the newest write's pixel match taken without its enable",
+    "h1_enable": "the older write h1's pixel match taken without its enable",
+    "h2_enable": "the oldest write h2's pixel match taken without its enable",
+    "h_priority": "h2's depth preferred to h1's, the newer, where both hold the pixel",
+    "w_priority": "the older writes' depths preferred to the newest's",
+}
 
 
 def plane_width(width):
@@ -45,9 +54,13 @@ def fragment_layout(x_bits, y_bits):
 class Framebuffer(wiring.Component):
     """``i``: fragments; ``clear`` (a pulse) with ``colour`` (RGB565); ``busy`` while a
     fragment is in flight or a clear runs; ``rd_addr``/``rd_data``: the scan-out's port, in
-    the ``pixel`` domain, one clock of latency."""
+    the ``pixel`` domain, one clock of latency. ``mutant``: one of ``MUTANTS``, for the
+    tests only."""
 
-    def __init__(self, width, height, x_bits, y_bits, read_domain="pixel"):
+    def __init__(self, width, height, x_bits, y_bits, read_domain="pixel", mutant=None):
+        if mutant is not None and mutant not in MUTANTS:
+            raise ValueError(f"mutant: one of {', '.join(MUTANTS)}, not {mutant!r}")
+        self.mutant = mutant
         self.width, self.height = width, height
         self.w2 = plane_width(width)
         self.words = self.w2 * height
@@ -105,11 +118,17 @@ class Framebuffer(wiring.Component):
               Signal(signed(16), name="h1_depth"))
         same_w, in_h, near_w, near_h = (Signal(name=n) for n in
                                         ("same_w", "in_h", "near_w", "near_h"))
-        hit1 = w[0] & (a1 == w[1])              # what will be h1 holds stage 1's pixel
-        hit2 = h1[0] & (a1 == h1[1])            # what will be h2
+        mutant = self.mutant
+        hit1 = (mutant == "h1_enable" or w[0]) & (a1 == w[1])   # what will be h1 holds
+        hit2 = (mutant == "h2_enable" or h1[0]) & (a1 == h1[1])  # stage 1's pixel; h2
         m.d.sync += [same_w.eq(a1 == a2), near_w.eq(d1 > d2), in_h.eq(hit1 | hit2),
-                     near_h.eq(Mux(hit1, d1 > w[2], d1 > h1[2]))]
-        win = v2 & Mux(w[0] & same_w, near_w, Mux(in_h, near_h, d2 > read))
+                     near_h.eq(Mux(hit2, d1 > h1[2], d1 > w[2]) if mutant == "h_priority"
+                               else Mux(hit1, d1 > w[2], d1 > h1[2]))]
+        in_w = same_w if mutant == "w_enable" else w[0] & same_w
+        if mutant == "w_priority":
+            win = v2 & Mux(in_h, near_h, Mux(in_w, near_w, d2 > read))
+        else:
+            win = v2 & Mux(in_w, near_w, Mux(in_h, near_h, d2 > read))
         m.d.sync += [w[0].eq(win), w[1].eq(a2), w[2].eq(d2), w[3].eq(c2),
                      *[x.eq(y) for x, y in zip(h1, w[:3])]]
         with m.If(win):

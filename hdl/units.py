@@ -70,7 +70,7 @@ def make_unit(name, *, spec=False, **params) -> Unit:
 
 
 def describe(name):
-    unit = UNITS[name].spec()
+    unit = (UNITS.get(name) or _pipelines()[name]).spec()
     return {"name": name, "doc": unit.DOC, "params": dict(unit.PARAMS),
             "param_ranges": unit.param_ranges(),
             "latency": unit.latency,

@@ -1,7 +1,8 @@
 """``python -m sim``: describe units, run them on the RTL, export Verilog, check against golden.
 
   units [--json]                      every unit's parameters (defaults, ranges, choices) and
-                                      field formats
+                                      field formats, and the scene pipeline's (its choices:
+                                      the registered stages')
   run UNIT --in IN.npz --out OUT.npz [--simulator S] [--param N=V]
                                       stream IN's rows through the unit's RTL into OUT
   verilog [--out DIR]                 Verilog of every unit with one port per field, and its
@@ -29,13 +30,18 @@ from .run import simulate
 from .simulators import SIMS, available
 
 def cmd_units(args):
+    from hdl.units import PIPELINES
     units = [describe(n) for n in UNITS]
+    # the composed pipelines (a scene's: its choices and parameters are the registered
+    # stages', scene.registry)
+    pipelines = [describe(n) for n in PIPELINES]
     sims = {s: available(s) or "available" for s in SIMS}
     if args.json:
-        print(json.dumps({"units": units, "simulators": sims}, indent=2))
+        print(json.dumps({"units": units, "pipelines": pipelines, "simulators": sims},
+                         indent=2))
         return
     print("simulators: " + "; ".join(f"{s} ({why})" for s, why in sims.items()) + "\n")
-    for u in units:
+    for u in units + pipelines:
         print(f"{u['name']}  (latency {u['latency']} at the defaults)\n  {u['doc']}")
         for k, v in u["params"].items():
             r = u["param_ranges"][k]
@@ -207,6 +213,18 @@ def cmd_check(args):
 
 
 def main(argv=None):
+    with user_errors():            # a stage of one's own that cannot load: one line
+        ap = parser()
+        args = ap.parse_args(argv)
+        if args.cmd == "check" and args.vectors not in (None, "all") \
+                and not args.vectors.isdigit():
+            raise UsageError(f"--vectors must be a number or 'all', not {args.vectors!r}")
+        rc = {"units": cmd_units, "run": cmd_run, "verilog": cmd_verilog,
+              "check": cmd_check, "render": cmd_render}[args.cmd](args)
+    sys.exit(1 if rc else 0)
+
+
+def parser():
     ap = argparse.ArgumentParser(prog="python -m sim", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -237,8 +255,14 @@ def main(argv=None):
     p.add_argument("--texture", choices=("external", "onchip"),
                    help="a bump scene's texture: external (default for generic) or onchip "
                         "(default for an FPGA target)")
+    from scene import registry
     p = sub.add_parser("render", help="render a scene through its pipeline's RTL, beside the "
-                                      "float model and the reference")
+                                      "float model and the reference",
+                       epilog="the registered stages' choices (scene.registry; "
+                              f"{registry.ENV} adds your own): shading.method: "
+                              f"{', '.join(registry.methods())}; shading.power: "
+                              f"{', '.join(registry.powers())}; bump.method: "
+                              f"{', '.join(registry.bumps())}")
     p.add_argument("scene", metavar="SCENE.toml")
     p.add_argument("--out", metavar="DIR", help="default: build/render/<scene name>/")
     p.add_argument("--simulator", choices=SIMS, default="verilator",
@@ -278,14 +302,7 @@ def main(argv=None):
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--waves", action="store_true",
                    help="write a waveform per unit under build/sim/<simulator>/")
-    args = ap.parse_args(argv)
-    with user_errors():
-        if args.cmd == "check" and args.vectors not in (None, "all") \
-                and not args.vectors.isdigit():
-            raise UsageError(f"--vectors must be a number or 'all', not {args.vectors!r}")
-        rc = {"units": cmd_units, "run": cmd_run, "verilog": cmd_verilog,
-              "check": cmd_check, "render": cmd_render}[args.cmd](args)
-    sys.exit(1 if rc else 0)
+    return ap
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ from hdl.fixed import FieldError, check_arrays
 from hdl.span_unit.plan import KNOBS
 from hdl.units import ParamError
 from scene.driver import SceneError
+from scene.stage import StageError
 
 from .batch import BatchError
 from .stream import StreamError
@@ -115,7 +116,7 @@ def user_errors():
     """Report a user's mistake as ``error: ...`` with exit code 2, not a traceback."""
     try:
         yield
-    except (UsageError, FieldError, ParamError, SceneError) as e:
+    except (UsageError, FieldError, ParamError, SceneError, StageError) as e:
         print(f"error: {e}", file=sys.stderr)
         sys.exit(2)
     except (BatchError, StreamError) as e:     # the RTL hung or broke a stream rule

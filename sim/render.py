@@ -92,12 +92,12 @@ def run_rtl(prep, simulator="verilator", mem_latency=12, mem_ready=1.0, progress
 
 def render(scene_path, out_dir=None, simulator="verilator", size=None, quiet=False,
            hardware=None, mem_latency=12, mem_ready=1.0):
-    """Render a scene; writes the five files of scenes.md and returns the metrics.
-    ``hardware``: pipeline parameters that are not scene keys (``make tradeoffs``'s knobs:
+    """Render a scene (a file, or a parsed scene); writes the five files of scenes.md and
+    returns the metrics. ``hardware``: pipeline parameters that are not scene keys (``make tradeoffs``'s knobs:
     the reciprocal, the power table's bits, fenney_dot's renormalisation). ``mem_latency``,
     ``mem_ready``: the texture memory's latency and the chance each clock that it takes a
     request and offers a response (``sim.stream.Memory``)."""
-    scene = S.load(scene_path)
+    scene = scene_path if isinstance(scene_path, dict) else S.load(scene_path)
     if size:
         scene["image"]["width"], scene["image"]["height"] = size
         scene = S.parse({k: v for k, v in scene.items() if k != "name"}, scene["name"])
@@ -181,16 +181,31 @@ def _names(unit):
     return unit["name"] + (f" ({', '.join(p['name'] for p in parts)})" if parts else "")
 
 
+def gallery_scenes(scenes_dir=None):
+    """The gallery's scenes: every file in ``scenes/`` (the default first), then, for each
+    registered shading method that none of them uses (a method of one's own:
+    ``scene.registry``), the default scene through it, named after the method."""
+    from scene import registry
+    paths = sorted(Path(scenes_dir or SCENES).glob("*.toml"),
+                   key=lambda p: (p.stem != "default", p.stem))
+    scenes = [S.load(p) for p in paths]
+    used = {sc["shading"]["method"] for sc in scenes}
+    default = next((sc for sc in scenes if sc["name"] == "default"), None)
+    for m in (m for m in registry.methods() if m not in used and default):
+        data = {k: v for k, v in default.items() if k != "name"}
+        scenes.append(S.parse({**data, "shading": {**data["shading"], "method": m}}, m))
+    return scenes
+
+
 def gallery(scenes_dir=None, simulator="verilator"):
-    """Render every scene in ``scenes/`` and write one contact sheet,
+    """Render the gallery's scenes (``gallery_scenes``) and write one contact sheet,
     ``build/render/gallery.png``: each scene's RTL image labelled with its method and its PSNR
     against the reference, and the default scene's reference."""
     from PIL import Image, ImageDraw
-    scenes = sorted(Path(scenes_dir or SCENES)
-                    .glob("*.toml"), key=lambda p: (p.stem != "default", p.stem))
+    scenes = gallery_scenes(scenes_dir)
     tiles = []
-    for path in scenes:
-        m = render(path, simulator=simulator)
+    for scene in scenes:
+        m = render(scene, simulator=simulator)
         out = BUILD / "render" / m["scene"]
         q = m["pipeline"]["params"]
         if m["bump"] == "none":

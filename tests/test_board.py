@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from amaranth.sim import Simulator
 
-from board.framebuffer import Framebuffer
+from board.framebuffer import MUTANTS, Framebuffer
 from board.link import COUNTERS, KINDS, REPLY_BYTES, SYNC, Link, crc16
 from board.protocol import Encoder, frame, parse_reply
 from board.tmds import CONTROL, TMDSEncoder, decode, disparity, encode
@@ -299,8 +299,8 @@ def test_link_clear_waits_for_the_pipeline_and_carries_the_colour():
 
 # ---- the framebuffer ------------------------------------------------------------------------
 
-def _framebuffer_rtl(W, H, frags, p_valid=0.8, seed=4):
-    dut = Framebuffer(W, H, 8, 8)
+def _framebuffer_rtl(W, H, frags, p_valid=0.8, seed=4, mutant=None):
+    dut = Framebuffer(W, H, 8, 8, mutant=mutant)
     img = np.zeros((H, W, 3), np.uint8)
     n = len(frags["x"])
     rng = random.Random(seed)
@@ -361,29 +361,45 @@ def _rising(rng, n):
     return frags
 
 
-@pytest.mark.parametrize("make, n, p_valid", [(_hazards, 1500, 0.9), (_rising, 3000, 0.97)],
-                         ids=["hazards", "rising"])
-def test_framebuffer_depth_test_equals_its_model(make, n, p_valid):
-    """The plane equals the model's (scene/framebuffer.py) pixel for pixel, and the RTL made
-    exactly the writes of the depth test in stream order."""
+def _depth_test_errors(make, n, p_valid, mutant=None):
+    """The framebuffer's RTL on a stream against its model (scene/framebuffer.py): the pixels
+    of the plane that differ, and the RTL's writes less the depth test's in stream order (a
+    fragment writes when it is nearer than all before it at its pixel: a wrong forwarding
+    choice writes where it should not, or fails to, and a later write may hide it in the
+    plane); also the fragments outside the image, against the count."""
     rng = random.Random(6)
     W, H = 12, 10
     frags = make(rng, n)
     for c in "rgb":
         frags[c] = [rng.randrange(256) for _ in range(n)]
-    img, outside, written = _framebuffer_rtl(W, H, frags, p_valid=p_valid)
+    img, outside, written = _framebuffer_rtl(W, H, frags, p_valid=p_valid, mutant=mutant)
     model = board_frame((W, H), {k: np.array(v) for k, v in frags.items()},
                         expand565(0x1234) / 255)
-    assert (img == model).all(), np.argwhere((img != model).any(-1))[:5]
-    assert outside == sum(x >= W or y >= H for x, y in zip(frags["x"], frags["y"]))
-    # every write, not only the last at each pixel: a fragment writes when it is nearer than
-    # all before it at its pixel (a wrong forwarding choice writes where it should not, or
-    # fails to, and a later write may hide it in the plane)
     best, wins = {}, 0
     for x, y, d in zip(frags["x"], frags["y"], frags["depth"]):
         if x < W and y < H and max(d, -32767) > best.get((x, y), -32768):
             best[(x, y)], wins = max(d, -32767), wins + 1
-    assert written == wins
+    return (int((img != model).any(-1).sum()), written - wins,
+            outside - sum(x >= W or y >= H for x, y in zip(frags["x"], frags["y"])))
+
+
+STREAMS = [(_hazards, 1500, 0.9), (_rising, 3000, 0.97)]
+
+
+@pytest.mark.parametrize("make, n, p_valid", STREAMS, ids=["hazards", "rising"])
+def test_framebuffer_depth_test_equals_its_model(make, n, p_valid):
+    """The plane equals the model's pixel for pixel, and the RTL made exactly the writes of
+    the depth test in stream order."""
+    assert _depth_test_errors(make, n, p_valid) == (0, 0, 0)
+
+
+@pytest.mark.parametrize("mutant", sorted(MUTANTS))
+def test_framebuffer_forwarding_mutants_are_caught(mutant):
+    """Each of the forwarding's five mutants (an enable dropped, a priority swapped:
+    ``board.framebuffer.MUTANTS``) is caught by the test above: on one of its two streams,
+    the plane or the count of writes differs from the depth test's."""
+    errors = [_depth_test_errors(*stream, mutant=mutant)[:2] for stream in STREAMS]
+    assert any(e != (0, 0) for e in errors), (mutant, errors)
 
 
 # ---- one whole frame on Verilator -----------------------------------------------------------

@@ -1,5 +1,5 @@
 """A second effect in one file, with a scene key and an interpolated channel of its own: fog by
-distance (README, "Adding an effect"). The scene's ``[fog]`` table gives ``near``, ``far``
+distance (README, "Adding an effect or a method"). The scene's ``[fog]`` table gives ``near``, ``far``
 (camera distances along the view axis) and ``color``; each vertex's fog factor
 f = clamp((far - z) / (far - near), 0, 1) rides the raster as a linear channel, and each
 pixel's colour is blended toward the fog's: c f + fog (1 - f).
