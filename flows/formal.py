@@ -1,5 +1,7 @@
-"""``make formal``: the stream contract proven with SymbiYosys on every unit and on one composed
-pipeline per method and bump method, and a mutant for each property that the check must catch.
+"""``make formal``: the stream contract proven with SymbiYosys on every unit, on one composed
+pipeline per method and bump method, and on each registered stage of one's own alone
+(``stage_<name>``, ``scene.stage_alone``), and a mutant for each property that the check must
+catch.
 
 Each design is exported (``sim.verilog.export``) and wrapped in a generated harness
 (``harness``): free inputs (``anyseq``), uniforms held (``anyconst``), a reset in the first
@@ -38,7 +40,8 @@ import sys
 from hdl.dsp import soft_as_mul
 from hdl.span_unit.queue import ROW_QUEUE
 from hdl.units import UNITS, make_unit
-
+from scene import registry
+from scene.stage_alone import one_row      # registers the "stage" unit (stage_<name>)
 from sim.verilog import export
 
 from .sby import COUNT, MEM_WAIT, OUT, keep_only, memory_model as _memory, run_job, tools_env
@@ -58,7 +61,6 @@ def pipelines():
     them when asked (``scene.registry``: a method of one's own too); a bump method's texture
     filtered bilinear where its stages take that (four banks: the memory join at its
     widest)."""
-    from scene import registry
     from scene.pipeline import ScenePipeline
     out = {f"scene_{m}": {"method": m} for m in registry.methods()}
     for bump in registry.bumps()[1:]:
@@ -82,12 +84,21 @@ MUTANTS = {       # name: (what it breaks, the property that must catch it: one-
 }
 
 
+def stages():
+    """A one-row unit per registered stage that has no unit of its own (a stage of one's
+    own: ``scene.stage_alone``), in a pipeline that wants it (its ``when``), so that it is
+    proven as every unit is; the project's stages are their units."""
+    return {f"stage_{c.name}": {"stage": c.name, **c.when} for c in registry.stages()[1:]
+            if c.name not in UNITS and one_row(c) and isinstance(c.when, dict)}
+
+
 def targets():
-    """``{name: (unit name, params)}``: every unit at its defaults (the raster small), and the
-    pipelines."""
+    """``{name: (unit name, params)}``: every unit at its defaults (the raster small), the
+    pipelines and the stages of one's own."""
     out = {n: (n, RASTER if n == "raster" else {}) for n in UNITS}
     out["raster_bmc"] = ("raster", RASTER)      # the whole raster's BMC: DEEP
     out.update({n: ("scene", {**SMALL, **q}) for n, q in pipelines().items()})
+    out.update({n: ("stage", {**SMALL, **q}) for n, q in stages().items()})
     return out
 
 
@@ -146,7 +157,7 @@ def harness(unit, module, mutant=None, only=None, cut=False, valids=(), regs=())
     breaks, not by another); ``valids``, ``regs``: a one-row unit's stage valid bits and data
     registers (``stage_valids``, ``stage_regs``), which its shadow's invariants name."""
     ins, outs, uni, status, streams = _ports(unit)
-    multi = "tri" in {f.name for f in unit.outputs}
+    multi = is_multi(unit)
     host = any(p == "i_cmd" for p, _ in ins)
     tri = "in_t & ~i_cmd" if host else "in_t"
     L = [f"`default_nettype none", "module formal_top(input wire clk);",
@@ -655,8 +666,9 @@ def table(results):
 
 
 def is_multi(unit):
-    """Many fragments per input, each with its triangle's ``tri``: the raster, the pipelines."""
-    return "tri" in {f.name for f in unit.outputs}
+    """Many fragments per input, each with its triangle's ``tri``: the raster, the pipelines
+    (their status ports say so; a stage alone carries ``tri`` as data, one row in, one out)."""
+    return bool(unit.status_ports)
 
 
 def mutant_property(mutant, unit):

@@ -136,6 +136,20 @@ class ScenePipeline(Unit):
         """From a triangle in to its first fragment out, when nothing waits."""
         return self.raster.latency + self.shading_latency
 
+    def stage_units(self, layout, platform=None):
+        """The shading stages as components, in order, each made for the layout the one before
+        it gives (``layout``: the raster's fragment), the last giving the fragment's fields:
+        ``[(stage, StageUnit)]``."""
+        out, rename, rest = [], self.raster.rename(), self.stages[1:]
+        for stage in rest:
+            unit = StageUnit(stage, layout, self.outputs if stage is rest[-1] else None,
+                             rename, source=SOURCE,
+                             bases={key: base for (name, key), base in self.table_bases.items()
+                                    if name == stage.name}, platform=platform)
+            out.append((stage, unit))
+            layout, rename = unit.o.payload.shape(), None
+        return out
+
     def elaborate(self, platform):
         m = Module()
         m.submodules.raster = raster = RasterUnit(**self.raster.params)
@@ -156,14 +170,9 @@ class ScenePipeline(Unit):
             regs[f.name] = reg = Signal(f.fmt.shape, name=f"r_{f.name}")
             with m.If(w_en & host.equals(w_addr, host.REGISTERS + k)):
                 m.d.sync += reg.eq(w_data[:f.fmt.width])
-        last, rename, busy = raster.o, self.raster.rename(), raster.busy
+        last, busy = raster.o, raster.busy
         held = [raster.busy]
-        rest = self.stages[1:]
-        for k, stage in enumerate(rest):          # the last gives the fragment's fields
-            out = self.outputs if stage is rest[-1] else None
-            unit = StageUnit(stage, last.payload.shape(), out, rename, source=SOURCE,
-                             bases={key: base for (name, key), base in self.table_bases.items()
-                                    if name == stage.name}, platform=platform)
+        for k, (stage, unit) in enumerate(self.stage_units(raster.o.payload.shape(), platform)):
             m.submodules[stage.name] = unit
             if k:                # between two stages: a register slice (hdl.unit.skid)
                 full = skid(m, f"skid_{stage.name}", last, unit.i)
@@ -177,7 +186,7 @@ class ScenePipeline(Unit):
                 wiring.connect(m, wiring.flipped(getattr(self, name)), getattr(unit, name))
             busy = busy | unit.busy
             held.append(unit.busy)
-            last, rename = unit.o, None
+            last = unit.o
         wiring.connect(m, last, wiring.flipped(self.o))
         # ``drained`` a register: nothing in flight a clock ago and no triangle taken then
         # (a write at the head lets none pass, so it stays true). The OR of every stage's

@@ -322,6 +322,7 @@ class StageUnit(wiring.Component):
     def __init__(self, stage, layout_in, out_fields=None, rename=None, source=None,
                  bases=None, platform=None):
         self.stage = stage
+        self.rename = rename or {}
         self._m = m = Module()
         self._in = {name: Signal(f.shape, name=f"i_{name}") for name, f in layout_in}
         self._uni = {f.name: Signal(f.fmt.shape, name=f"u_{f.name}") for f in stage.uniforms}

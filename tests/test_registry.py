@@ -4,6 +4,7 @@ derived from the stages sees it when asked, and a shading method the seeds do no
 its model."""
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +15,7 @@ from amaranth.hdl import signed
 from amaranth.lib import data
 from amaranth.sim import Simulator
 
+from flows.sby import tools_env
 from scene import driver as S, registry
 from scene.pipeline import ScenePipeline
 from scene.stage import Stage, StageError, StageUnit
@@ -203,3 +205,21 @@ def test_stages_from_outside_the_tree(tmp_path):
         r = _run(["units"], {registry.ENV: item})
         assert r.returncode == 2 and r.stderr.count("\n") == 1 and message in r.stderr \
             and r.stderr.startswith("error: "), r.stderr
+
+
+@pytest.mark.skipif(shutil.which("yowasp-sby", path=tools_env()["PATH"]) is None,
+                    reason="yowasp-sby is not installed")
+def test_a_stage_of_ones_own_is_proven_alone():
+    """``make formal``'s ``stage_half_lambert`` (``scene.stage_alone``: the stage as a one-row
+    unit, in the pipeline that wants it): every property proven by k-induction with the
+    one-row shadow, as every unit is, and a mutant that drops an item caught by ``order``, so
+    the proof can fail. Not a target until the stage is registered."""
+    from flows import formal
+    assert "stage_half_lambert" not in formal.targets()
+    with registry.registered(HalfLambert):
+        unit, params = formal.targets()["stage_half_lambert"]
+        proof = formal.run("stage_half_lambert", unit, params, "prove", only=formal.ORDER)
+        assert proof["status"] == "pass" and not proof["failed"], proof
+        assert "successful proof by k-induction" in open(proof["log"]).read()
+        r = formal.run("stage_half_lambert", unit, params, "bmc", "dropped")
+        assert formal.caught(r), r
