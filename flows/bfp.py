@@ -201,16 +201,24 @@ def blocks(inputs, m, screen_bits, sub_bits, modes, rate, recip=False):
 
 
 def built_share(inputs, m, screen_bits, sub_bits, modes):
-    """The narrow engine as built (``span.row_engine(narrow=m)``): per triangle drawn, whether
+    """The narrow engine's share of the triangles drawn and of their rows
+    (:func:`narrow_triangles`)."""
+    x, y = R._vertices(inputs)
+    tri, _, py = R.coverage(x, y, sub_bits, screen_bits)
+    ok = narrow_triangles(inputs, m, screen_bits, sub_bits, modes)
+    drawn = np.unique(tri)
+    rows = np.unique(tri.astype(np.int64) * (2 << screen_bits) + py) // (2 << screen_bits)
+    return ok[drawn].mean(), ok[rows].mean()
+
+
+def narrow_triangles(inputs, m, screen_bits, sub_bits, modes):
+    """The narrow engine as built (``span.row_engine(narrow=m)``): per triangle in, whether
     the setup chooses it (``golden.bfp.choice``: its derived bound, with the setup's own
     terms, within the raster's budget, from the bit lengths of its constants, of |Omega| and
-    of y2), here from the float model's constants at the setup's 28 fraction bits; returns
-    the share of triangles drawn and of their rows."""
+    of y2), here from the float model's constants at the setup's 28 fraction bits."""
     from hdl.setup_unit.choice import choice_tables
     from hdl.setup_unit.setup import Widths
     FO = Widths.FO
-    x, y = R._vertices(inputs)
-    tri, _, py = R.coverage(x, y, sub_bits, screen_bits)
     st = R.sorted_triangles(inputs, len(modes), sub_bits)
     with np.errstate(divide="ignore", invalid="ignore"):
         omega = q.omega(st["x1"], st["y1"], st["x2"], st["y2"])
@@ -226,15 +234,14 @@ def built_share(inputs, m, screen_bits, sub_bits, modes):
             Pu, Pv = 2 * a * ux + c * vx, 2 * b * vx + c * ux
         start, steps, own = choice_tables(m, 2 * screen_bits + 20, FO, screen_bits, 7.2e-9,
                                           mode == "linear")
-        s0, s1 = ((np.nan_to_num(_exp(*g)) + FO - (m - 1)).clip(0, None).astype(int)
-                  for g in ((a, b, c, d, e), (Pu, Pv)))
+        with np.errstate(invalid="ignore"):       # culled triangles' NaN: never chosen
+            s0, s1 = ((np.nan_to_num(_exp(*g)) + FO - (m - 1)).clip(0, None).astype(int)
+                      for g in ((a, b, c, d, e), (Pu, Pv)))
         total = np.take(start, s0.clip(0, len(start) - 1)) + np.take(own, kn)
         if mode != "linear":
             total = total + np.take(steps, (s1 + kn).clip(0, len(steps) - 1))
         ok &= total <= 64
-    drawn = np.unique(tri)
-    rows = np.unique(tri.astype(np.int64) * (2 << screen_bits) + py) // (2 << screen_bits)
-    return ok[drawn].mean(), ok[rows].mean()
+    return ok
 
 
 def _scene_inputs(name, segments):
