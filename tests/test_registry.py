@@ -118,6 +118,10 @@ def test_a_registered_method_is_seen_by_every_list():
                                              ("s0", "xshading")]     # the stage's mode
         with pytest.raises(S.SceneError, match="hl_bits must be in 8..14, not 4"):
             S.prepare(S.load(EXAMPLES / "half_lambert.toml"), {"hl_bits": 4})
+        # make tradeoffs' shading row: the default scene's file, the method set over it
+        over = S.prepare(S.load(ROOT / "scenes" / "default.toml"), {"method": "half_lambert"})
+        assert [s.name for s in over["pipeline"].stages] == [s.name for s in
+                                                             prep["pipeline"].stages]
     assert not any(seen().values()), seen()
 
 

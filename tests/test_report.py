@@ -1,5 +1,5 @@
 """Hardware counts from Yosys against the seeds' own counts."""
-from flows.report import count
+from flows.report import count, file_tag
 
 
 def test_power_unit_is_the_patents_three_multiplies_and_five_add_subtracts(tmp_path):
@@ -20,3 +20,16 @@ def test_peercy_baseline_counts(tmp_path):
     vector (2 look-ups) instead of 9 dividers and 3 square roots."""
     c = count("peercy", work=tmp_path)
     assert (c["mul"], c["const_mul"], c["tables"]) == (32, 0, 2)
+
+
+def test_a_scene_pipelines_files_have_names_the_file_system_takes():
+    """A unit's build files are named by its parameters, but a scene pipeline's (its own
+    parameters and every stage's: 31 at the defaults) would pass a file name's 255 bytes
+    (make tradeoffs failed so on a stage with one more); past 120 characters they are a
+    digest, one per parameter set."""
+    from scene.pipeline import ScenePipeline
+    params = dict(ScenePipeline.PARAMS)
+    long = file_tag("scene", params)
+    assert len(long) < 40 and long.startswith("scene-")
+    assert file_tag("scene", {**params, "lights": 2}) != long
+    assert file_tag("colour", {"lights": 2}) == "colour-lights=2"
