@@ -219,9 +219,6 @@ def choose(q):
     stages = wanted(q)
     raster = stages[0]
     raster.given = {g for stage in stages[1:] for g in stage.gives}
-    # the mode N.L and N.H are interpolated in: the method's stage's, or the raster's own
-    raster.mode = next((s.interpolates for s in stages if s.interpolates),
-                       registry.methods().get(q["method"]))
     for stage in stages:
         stage.validate(q)
     channels = [c for stage in stages for c in stage.channels]

@@ -194,6 +194,14 @@ class Hardware:
     ports = {}             # name: (In or Out, fields): streams of the stage's own
 
     @property
+    def lighting_mode(self):
+        """The raster's mode for the lighting's channels (N.L, N.H, or a bump method's L' and
+        H') under the scene's shading method: the method's own (``scene.registry.methods``:
+        the raster's modes, or a method stage's ``interpolates``), never its name."""
+        from .registry import methods
+        return methods()[self.q["method"]]
+
+    @property
     def latency(self):
         raise NotImplementedError
 

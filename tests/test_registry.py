@@ -118,6 +118,13 @@ def test_a_registered_method_is_seen_by_every_list():
                                              ("s0", "xshading")]     # the stage's mode
         with pytest.raises(S.SceneError, match="hl_bits must be in 8..14, not 4"):
             S.prepare(S.load(EXAMPLES / "half_lambert.toml"), {"hl_bits": 4})
+        # with a bump method, its L' and H' channels in the method's mode, not its name, and
+        # d' from the bump stages' N.L
+        bump = S.prepare(S.parse({"shading": {"method": "half_lambert"},
+                                  "bump": {"method": "fenney_xz", "size": 16}}, "bump"))
+        assert {m for _, m in bump["pipeline"].channels} == {"linear", "xshading"}
+        assert [s.name for s in bump["pipeline"].stages][-3:] == ["power_table", "half_lambert",
+                                                                  "colour"]
         # make tradeoffs' shading row: the default scene's file, the method set over it
         over = S.prepare(S.load(ROOT / "scenes" / "default.toml"), {"method": "half_lambert"})
         assert [s.name for s in over["pipeline"].stages] == [s.name for s in

@@ -38,7 +38,7 @@ class FenneyDot(Stage):
     @property
     def channels(self):
         """Each lane's vector, its components a group of edge constants of their own."""
-        return [(f"{t}{k}{a}", self.q["method"], 1 + n) for n, (t, k) in enumerate(self.lanes)
+        return [(f"{t}{k}{a}", self.lighting_mode, 1 + n) for n, (t, k) in enumerate(self.lanes)
                 for a in "xyz"]
 
     @property

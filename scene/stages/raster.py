@@ -18,7 +18,6 @@ class Raster(Stage):
 
     methods = MODES       # its own shading methods: N.L and N.H interpolated in that mode
     given = ()            # what the stages after it give (``scene.pipeline.choose``)
-    mode = MODES[0]       # the mode it interpolates N.L and N.H in (``scene.pipeline.choose``)
     build_params = {"recip": (RECIPS[0], RECIPS),
                     "recip_iters": (2, RANGES["recip_iters"]),
                     **{k: (d, r) for k, (d, r, _) in KNOBS.items()}}   # the plan's knobs
@@ -31,8 +30,8 @@ class Raster(Stage):
         q = self.q
         own = [("depth", "linear", 0)]
         if "lighting" not in self.given:
-            own += [(f.name, self.mode, 0) for f in light_fields(q["lights"], q["specular"],
-                                                                  "d", "s")]
+            own += [(f.name, self.lighting_mode, 0)
+                    for f in light_fields(q["lights"], q["specular"], "d", "s")]
         return own
 
     def join(self, channels, flat, bits=None):
