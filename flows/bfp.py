@@ -244,6 +244,32 @@ def narrow_triangles(inputs, m, screen_bits, sub_bits, modes):
     return ok
 
 
+def recip_seed_slope(t, s_bits, g_bits, m_bits=24, d_bits=18):
+    """1/x for a mantissa x in [1, 2) from a table of 2^t words and one product, as issue 66
+    asks of the narrow raster (pico-gs's ``raster_recip_area``): the top t fraction bits of x
+    pick the word, the seed s (``s_bits`` fraction bits) and slope g (``g_bits``) of the
+    minimax line of 1/x on that interval [a, a + 2^-t), and r = s - g d, d = x - a floored to
+    ``d_bits`` below 2^-t (one 18 x 18 product). Returns (the largest |r x - 1| over every
+    ``m_bits``-bit mantissa, its derived bound): the line's own error h^2 / 8 (h = 2^-t, the
+    chord's h^2 f''/8 halved by the shift), the seed's rounding 2^-(s_bits+1), the slope's
+    2^-(g_bits+1) times d < h, d's floor 2^-(t+d_bits), each doubled to a relative error
+    (x < 2)."""
+    n = np.arange(1 << (m_bits - 1), 1 << m_bits, dtype=np.int64)
+    x = n / 2.0 ** (m_bits - 1)
+    i = (n >> (m_bits - 1 - t)) & ((1 << t) - 1)
+    a = 1 + np.arange(1 << t) / 2.0 ** t
+    g = 1 / (a * (a + 2.0 ** -t))                         # the chord's slope, |f'| between
+    mid = np.sqrt(a * (a + 2.0 ** -t))                    # where the chord is furthest above
+    seed = 1 / a - ((1 / a - g * (mid - a)) - 1 / mid) / 2
+    sq = np.rint(seed * 2.0 ** s_bits) / 2.0 ** s_bits
+    gq = np.rint(g * 2.0 ** g_bits) / 2.0 ** g_bits
+    d = np.floor((x - a[i]) * 2.0 ** (t + d_bits)) / 2.0 ** (t + d_bits)
+    err = np.abs((sq[i] - gq[i] * d) * x - 1).max()
+    bound = 2.0 ** -(2 * t + 3) + 2 * (2.0 ** -(s_bits + 1) + 2.0 ** -(g_bits + 1 + t)
+                                       + 2.0 ** -(t + d_bits))
+    return float(err), bound
+
+
 def _scene_inputs(name, segments):
     scene = S.load(SCENES / f"{name}.toml")
     if segments:
@@ -296,6 +322,13 @@ def main():
         got = [blocks(inputs, m, sb, sub, modes, TARGETS[label], r) for m, r in narrow]
         print(f"| {label} | {TARGETS[label]} | {got[0][1]} | "
               + " | ".join(f"{s * 100:.1f} %, {b}" for s, _, b in got) + " |")
+    print("\n| reciprocal: table words (DP16KD) | seed, slope bits | max relative error, every "
+          "24-bit mantissa | derived bound |")
+    print("| --- | --- | --- | --- |")
+    for t, sb, gb in ((8, 22, 14), (9, 22, 14), (10, 23, 13)):
+        err, bnd = recip_seed_slope(t, sb, gb)
+        print(f"| {1 << t} x 36 ({max(1, (1 << t) // 512)}) | {sb}, {gb} | 2^{np.log2(err):.2f} "
+              f"| 2^{np.log2(bnd):.2f} |")
     print("\n| triangles | in | fragments / triangle in | rows / triangle in | K median | "
           "K p99 | K max | K > 64 |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")

@@ -311,3 +311,17 @@ def test_the_choice_tables_keep_the_derived_bound(M):
                     assert bfp.narrow_ok(M, w.FI, [(linear, e0, e1)], 2 ** kn, 7.2e-9), \
                         (linear, s0, s1, kn)
         assert allowed > 0
+
+
+@pytest.mark.parametrize("t, s_bits, g_bits", [(8, 22, 14), (9, 22, 14), (10, 23, 13)])
+def test_the_seed_and_slope_reciprocal_is_within_its_derived_bound(t, s_bits, g_bits):
+    """Issue 66's reciprocal for the narrow raster (``flows.bfp.recip_seed_slope``): a word
+    of seed and slope (36 bits: a DP16KD holds 512) for each of 2^t intervals and one 18 x 18
+    product. Over every 24-bit mantissa its relative error is within the bound derived from
+    the minimax line (h^2 / 8) and the three roundings, and the 1,024-word table is within
+    2^-21, the narrow engine's unit at M = 21."""
+    from flows.bfp import recip_seed_slope
+    err, bound = recip_seed_slope(t, s_bits, g_bits)
+    assert err <= bound
+    if t == 10:
+        assert err < 2.0 ** -21
