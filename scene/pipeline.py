@@ -219,6 +219,9 @@ def choose(q):
     stages = wanted(q)
     raster = stages[0]
     raster.given = {g for stage in stages[1:] for g in stage.gives}
+    mode = registry.methods().get(q["method"])
+    for stage in stages:
+        stage.lighting_mode = mode
     for stage in stages:
         stage.validate(q)
     channels = [c for stage in stages for c in stage.channels]

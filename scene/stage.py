@@ -193,13 +193,11 @@ class Hardware:
     build_params = {}
     ports = {}             # name: (In or Out, fields): streams of the stage's own
 
-    @property
-    def lighting_mode(self):
-        """The raster's mode for the lighting's channels (N.L, N.H, or a bump method's L' and
-        H') under the scene's shading method: the method's own (``scene.registry.methods``:
-        the raster's modes, or a method stage's ``interpolates``), never its name."""
-        from .registry import methods
-        return methods()[self.q["method"]]
+    # the raster's mode for the lighting's channels (N.L, N.H, or a bump method's L' and H')
+    # under the scene's shading method: the method's own (``scene.registry.methods``: the
+    # raster's modes, or a method stage's ``interpolates``), never its name; set by
+    # ``scene.pipeline.choose``
+    lighting_mode = None
 
     @property
     def latency(self):
